@@ -1,0 +1,31 @@
+# Every target bootstraps .venv itself: a fresh machine needs only Python 3.11 and make.
+PYTHON ?= $(shell command -v python3.11 2>/dev/null || command -v python3)
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed-stamp
+
+.PHONY: run test test-all bench lint clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+run: $(STAMP)  ## the main job on a small default budget
+	$(VENV)/bin/stiffknots paper --budget small --out results/paper
+
+test: $(STAMP)  ## the default (fast) test suite; pytest exit 5 (no tests) fails
+	$(PY) -m pytest -m "not slow" -q
+
+test-all: $(STAMP)  ## every test, slow ones included
+	$(PY) -m pytest -q
+
+bench: $(STAMP)  ## benchmarks that print numbers (see bench/RESULTS.md)
+	$(PY) bench/run_bench.py
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check src tests bench
+
+clean:
+	rm -rf $(VENV) build *.egg-info src/*.egg-info
