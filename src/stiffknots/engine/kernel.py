@@ -1,0 +1,563 @@
+"""Compiled Monte Carlo kernel for closed bead chains (paper §VII).
+
+The chain is a closed polygon of N beads with unit bonds. The energy is the paper's discrete
+bending energy E_d = C Σ_n (1 − u_n·u_{n+1}) (§VII), with C = 1.
+
+Moves
+-----
+One move type covers both the paper's move and its generalisation, the *crankshaft*: pick a
+pivot bead j and a length m ≥ 1, and rotate the m beads j+1 … j+m (indices mod N) by an angle
+φ about the axis through the pivots j and k = j+m+1. For m = 1 this is exactly the paper's
+move (one bead rotated about the axis through its two neighbours by ±δ, δ = π/100). Bond
+lengths are preserved exactly (every bond either moves rigidly or joins a pivot, which lies on
+the axis), and only the bending angles at the two pivots change, so ΔE costs O(1).
+
+Exclusion (two models)
+----------------------
+* ``bead``  — beads at cyclic index distance ≥ 2 are never closer than ``d`` (the paper's rule,
+  d = 1/√2). Distances between a pivot and the moved beads are invariant (the pivots lie on
+  the rotation axis), so only moved–fixed pairs are checked.
+* ``tube``  — segments sharing no bead are never closer than ``w`` (the tube of §II).
+
+Strand passage is impossible by construction
+--------------------------------------------
+The rotation is continuous in the angle, t ↦ t·φ for t ∈ [0, 1]. Every point of a moved
+segment lies at distance ρ ≤ ρ_max from the axis (distance to a line is convex, so the maximum
+over a segment is reached at an end point), so along the path it moves with speed
+|φ|·ρ ≤ L := |φ|·ρ_max. The distance d(t) between a moved segment and a fixed segment is
+therefore L-Lipschitz in t, and d(t) ≥ max(d(0) − L t, d(1) − L (1 − t)) ≥ (d(0) + d(1) − L)/2.
+A move is accepted only if d(0) + d(1) > L for every pair (moved segment, fixed segment) that
+share no bead, so d(t) > 0 along the whole path: no segment of the chain crosses a segment it
+is not bonded to, and the knot type cannot change. Pairs of moved segments move rigidly
+(their distance is constant), and two bonded segments share a bead: they could only meet by
+folding back onto each other, which both exclusion models forbid (bead model: beads i, i+2 are
+≥ d apart; tube model: segments i, i+2 are ≥ w apart), and the turning angle at a pivot changes
+by at most L per move. Only pairs with d(1) ≤ L can fail the test; they are found with the
+cell list below, so the guard costs O(1) per moved bead.
+
+Cell list
+---------
+Segment midpoints are kept in a spatial hash of cubic cells of side ``cell`` (linked lists,
+doubly linked for O(1) updates). A fixed segment within distance D of a moved segment has its
+midpoint within 1 + D of the moved segment's midpoint, hence within 1.5 + D of its moved end
+bead, so scanning the cells around each moved bead finds every candidate; the bead rule is
+checked from the same scan (a bead within d of a point has the midpoint of the segment it
+starts within d + 1/2). The cost per move is independent of N.
+
+All functions here see arrays and numbers only (no Python objects) and allocate nothing in the
+loop.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from stiffknots.geometry import seg_dist2
+
+# integer parameter slots (``ipar``)
+I_MODE = 0  # 0 = bead, 1 = tube
+I_MMAX = 1  # largest number of beads moved by one crankshaft move (≥ 1)
+I_NIPAR = 2
+
+# float parameter slots (``fpar``)
+F_DELTA = 0  # angle of the single-bead move (paper: π/100)
+F_PSINGLE = 1  # probability of a single-bead move
+F_PHIMAX = 2  # largest angle of a multi-bead move
+F_LCAP = 3  # largest displacement of any point in a multi-bead move
+F_D = 4  # bead exclusion distance
+F_W = 5  # tube diameter
+F_CELL = 6  # cell side
+F_NFPAR = 7
+
+# counters (``cnt``), per move class: 0 = single bead, 1 = multi-bead
+C_TRIED = 0
+C_ENERGY_OK = 2
+C_ACCEPTED = 4
+C_NCNT = 6
+
+
+@njit(cache=True, inline="always")
+def _hash(ix, iy, iz, mask):
+    return ((ix * 73856093) ^ (iy * 19349663) ^ (iz * 83492791)) & mask
+
+
+@njit(cache=True)
+def cell_build(pos, cell, head, nxt, prv, bucket):
+    """(Re)build the spatial hash of segment midpoints. ``head`` has a power-of-two size."""
+    n = pos.shape[0]
+    mask = head.shape[0] - 1
+    inv = 1.0 / cell
+    for h in range(head.shape[0]):
+        head[h] = -1
+    for v in range(n):
+        w = v + 1
+        if w == n:
+            w = 0
+        mx = 0.5 * (pos[v, 0] + pos[w, 0])
+        my = 0.5 * (pos[v, 1] + pos[w, 1])
+        mz = 0.5 * (pos[v, 2] + pos[w, 2])
+        h = _hash(
+            np.int64(math.floor(mx * inv)),
+            np.int64(math.floor(my * inv)),
+            np.int64(math.floor(mz * inv)),
+            mask,
+        )
+        bucket[v] = h
+        prv[v] = -1
+        nxt[v] = head[h]
+        if head[h] >= 0:
+            prv[head[h]] = v
+        head[h] = v
+
+
+@njit(cache=True, inline="always")
+def _cell_update(v, h, head, nxt, prv, bucket):
+    old = bucket[v]
+    if old == h:
+        return
+    # unlink
+    p = prv[v]
+    q = nxt[v]
+    if p >= 0:
+        nxt[p] = q
+    else:
+        head[old] = q
+    if q >= 0:
+        prv[q] = p
+    # push front
+    bucket[v] = h
+    prv[v] = -1
+    nxt[v] = head[h]
+    if head[h] >= 0:
+        prv[head[h]] = v
+    head[h] = v
+
+
+@njit(cache=True)
+def energy_closed(pos):
+    """E_d = Σ_n (1 − u_n·u_{n+1}) for a closed unit-bond chain (paper §VII), C = 1."""
+    n = pos.shape[0]
+    e = 0.0
+    for v in range(n):
+        a = v - 1 if v > 0 else n - 1
+        b = v + 1 if v < n - 1 else 0
+        ux = pos[v, 0] - pos[a, 0]
+        uy = pos[v, 1] - pos[a, 1]
+        uz = pos[v, 2] - pos[a, 2]
+        wx = pos[b, 0] - pos[v, 0]
+        wy = pos[b, 1] - pos[v, 1]
+        wz = pos[b, 2] - pos[v, 2]
+        e += 1.0 - (ux * wx + uy * wy + uz * wz)
+    return e
+
+
+_M64 = 0xFFFFFFFFFFFFFFFF
+
+
+def new_rng_state(seed: int) -> np.ndarray:
+    """xoshiro256+ state (4 × uint64) from an integer seed, expanded with splitmix64."""
+    x = int(seed) & _M64
+    out = np.empty(4, dtype=np.uint64)
+    for q in range(4):
+        x = (x + 0x9E3779B97F4A7C15) & _M64
+        z = x
+        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _M64
+        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _M64
+        out[q] = z ^ (z >> 31)
+    if not out.any():
+        out[0] = 1
+    return out
+
+
+@njit(cache=True, inline="always")
+def _rotl(x, k):
+    return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
+
+
+@njit(cache=True, inline="always")
+def _next(s0, s1, s2, s3):
+    """One step of xoshiro256+ (Blackman & Vigna); returns (uniform in [0, 1), new state)."""
+    r = s0 + s3
+    t = s1 << np.uint64(17)
+    s2 ^= s0
+    s3 ^= s1
+    s1 ^= s2
+    s0 ^= s3
+    s2 ^= t
+    s3 = _rotl(s3, 45)
+    return (r >> np.uint64(11)) * (1.0 / 9007199254740992.0), s0, s1, s2, s3
+
+
+@njit(cache=True)
+def uniforms(rng, n):
+    """``n`` uniforms from the kernel's generator (for tests of the generator)."""
+    out = np.empty(n)
+    s0, s1, s2, s3 = rng[0], rng[1], rng[2], rng[3]
+    for q in range(n):
+        out[q], s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+    rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
+    return out
+
+
+@njit(cache=True)
+def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, newpos, cnt,
+              rng):
+    """Attempt ``n_moves`` crankshaft moves at ``temperature`` (Metropolis); return ΔE.
+
+    Parameters
+    ----------
+    pos : (N, 3) float64, modified in place. Closed chain with unit bonds.
+    n_moves : number of attempted moves.
+    temperature : k_B T in units of C (0 means a quench: only ΔE ≤ 0 is accepted).
+    ipar, fpar : integer and float parameters, see the ``I_*`` and ``F_*`` slots.
+    head, nxt, prv, bucket : the cell list of segment midpoints (``cell_build``).
+    newpos : (≥ m_max, 3) float64 scratch space.
+    cnt : (C_NCNT,) int64 counters, incremented.
+    rng : (4,) uint64 xoshiro256+ state (``new_rng_state``), advanced in place.
+
+    Returns
+    -------
+    float : the total energy change of the accepted moves.
+    """
+    n = pos.shape[0]
+    mode = ipar[I_MODE]
+    m_max = ipar[I_MMAX]
+    if m_max > n - 3:
+        m_max = n - 3
+    delta = fpar[F_DELTA]
+    p_single = fpar[F_PSINGLE]
+    phi_max = fpar[F_PHIMAX]
+    l_cap = fpar[F_LCAP]
+    d2 = fpar[F_D] * fpar[F_D]
+    w = fpar[F_W]
+    w2 = w * w
+    cell = fpar[F_CELL]
+    inv = 1.0 / cell
+    mask = head.shape[0] - 1
+    cd = math.cos(delta)
+    sd = math.sin(delta)
+    beta = 1.0 / temperature if temperature > 0.0 else 0.0
+    de_total = 0.0
+    s0, s1, s2, s3 = rng[0], rng[1], rng[2], rng[3]
+
+    for _it in range(n_moves):
+        # ---- propose -------------------------------------------------------------------
+        u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+        if m_max < 2 or u < p_single:
+            m = 1
+            cls = 0
+        else:
+            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+            m = 2 + int(u * (m_max - 1))
+            if m > m_max:
+                m = m_max
+            cls = 1
+        cnt[C_TRIED + cls] += 1
+        u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+        j = int(u * n)
+        if j >= n:
+            j = n - 1
+        k = j + m + 1
+        if k >= n:
+            k -= n
+        jx = pos[j, 0]
+        jy = pos[j, 1]
+        jz = pos[j, 2]
+        ex = pos[k, 0] - jx
+        ey = pos[k, 1] - jy
+        ez = pos[k, 2] - jz
+        el = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if el < 1e-9:
+            continue
+        ex /= el
+        ey /= el
+        ez /= el
+        # largest distance of a moved bead from the axis (invariant under the move)
+        rho2 = 0.0
+        for q in range(m):
+            b = j + 1 + q
+            if b >= n:
+                b -= n
+            rx = pos[b, 0] - jx
+            ry = pos[b, 1] - jy
+            rz = pos[b, 2] - jz
+            t = rx * ex + ry * ey + rz * ez
+            r2 = rx * rx + ry * ry + rz * rz - t * t
+            if r2 > rho2:
+                rho2 = r2
+        rho = math.sqrt(rho2) if rho2 > 0.0 else 0.0
+        if cls == 0:
+            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+            if u < 0.5:
+                c = cd
+                s = sd
+                phi = delta
+            else:
+                c = cd
+                s = -sd
+                phi = delta
+        else:
+            lim = phi_max
+            if rho * lim > l_cap:
+                lim = l_cap / rho
+            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+            phi = (2.0 * u - 1.0) * lim
+            c = math.cos(phi)
+            s = math.sin(phi)
+            phi = abs(phi)
+        oc = 1.0 - c
+        # Rodrigues rotation of the moved beads about the axis through pivot j
+        for q in range(m):
+            b = j + 1 + q
+            if b >= n:
+                b -= n
+            rx = pos[b, 0] - jx
+            ry = pos[b, 1] - jy
+            rz = pos[b, 2] - jz
+            t = (rx * ex + ry * ey + rz * ez) * oc
+            newpos[q, 0] = jx + rx * c + (ey * rz - ez * ry) * s + ex * t
+            newpos[q, 1] = jy + ry * c + (ez * rx - ex * rz) * s + ey * t
+            newpos[q, 2] = jz + rz * c + (ex * ry - ey * rx) * s + ez * t
+        # ---- energy: only the bending angles at the pivots j and k change --------------
+        jm = j - 1 if j > 0 else n - 1
+        kp = k + 1 if k < n - 1 else 0
+        b1 = j + 1 if j < n - 1 else 0  # first moved bead
+        bm = k - 1 if k > 0 else n - 1  # last moved bead
+        ax = jx - pos[jm, 0]
+        ay = jy - pos[jm, 1]
+        az = jz - pos[jm, 2]
+        old1 = ax * (pos[b1, 0] - jx) + ay * (pos[b1, 1] - jy) + az * (pos[b1, 2] - jz)
+        new1 = ax * (newpos[0, 0] - jx) + ay * (newpos[0, 1] - jy) + az * (newpos[0, 2] - jz)
+        kx = pos[k, 0]
+        ky = pos[k, 1]
+        kz = pos[k, 2]
+        bx = pos[kp, 0] - kx
+        by = pos[kp, 1] - ky
+        bz = pos[kp, 2] - kz
+        old2 = (kx - pos[bm, 0]) * bx + (ky - pos[bm, 1]) * by + (kz - pos[bm, 2]) * bz
+        new2 = (
+            (kx - newpos[m - 1, 0]) * bx
+            + (ky - newpos[m - 1, 1]) * by
+            + (kz - newpos[m - 1, 2]) * bz
+        )
+        de = (old1 - new1) + (old2 - new2)
+        if de > 0.0:
+            if beta == 0.0:
+                continue
+            x = de * beta
+            if x > 50.0:
+                continue
+            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+            if u >= math.exp(-x):
+                continue
+        cnt[C_ENERGY_OK + cls] += 1
+        # ---- exclusion and strand-passage guard ----------------------------------------
+        lmove = phi * rho  # largest displacement of any moved point
+        dseg = w if w > lmove else lmove
+        reach = 1.5 + dseg
+        if mode == 0 and fpar[F_D] + 0.5 > reach:
+            reach = fpar[F_D] + 0.5
+        lim_mid2 = (1.0 + dseg) * (1.0 + dseg)
+        ok = True
+        for q in range(m):
+            if not ok:
+                break
+            b = j + 1 + q
+            if b >= n:
+                b -= n
+            px = newpos[q, 0]
+            py = newpos[q, 1]
+            pz = newpos[q, 2]
+            # previous bead (moved or pivot j), new position
+            if q == 0:
+                ppx = jx
+                ppy = jy
+                ppz = jz
+                opx = jx
+                opy = jy
+                opz = jz
+            else:
+                ppx = newpos[q - 1, 0]
+                ppy = newpos[q - 1, 1]
+                ppz = newpos[q - 1, 2]
+                bb = b - 1 if b > 0 else n - 1
+                opx = pos[bb, 0]
+                opy = pos[bb, 1]
+                opz = pos[bb, 2]
+            last = q == m - 1
+            # moved segment A = (b-1, b), and for the last moved bead also B = (b, k)
+            amx = 0.5 * (ppx + px)
+            amy = 0.5 * (ppy + py)
+            amz = 0.5 * (ppz + pz)
+            bmx = 0.5 * (px + kx)
+            bmy = 0.5 * (py + ky)
+            bmz = 0.5 * (pz + kz)
+            sa = b - 1 if b > 0 else n - 1  # index of segment A
+            # cells overlapping the cube [p - reach, p + reach]: at most 2 per axis when
+            # the cell side is ≥ reach (the usual case), exact in every case
+            x0 = np.int64(math.floor((px - reach) * inv))
+            x1 = np.int64(math.floor((px + reach) * inv))
+            y0 = np.int64(math.floor((py - reach) * inv))
+            y1 = np.int64(math.floor((py + reach) * inv))
+            z0 = np.int64(math.floor((pz - reach) * inv))
+            z1 = np.int64(math.floor((pz + reach) * inv))
+            for cx in range(x0, x1 + 1):
+                if not ok:
+                    break
+                for cy in range(y0, y1 + 1):
+                    if not ok:
+                        break
+                    for cz in range(z0, z1 + 1):
+                        if not ok:
+                            break
+                        v = head[_hash(cx, cy, cz, mask)]
+                        while v >= 0:
+                            off = v - j
+                            if off < 0:
+                                off += n
+                            if off <= m:  # moved segment: rigid with respect to A and B
+                                v = nxt[v]
+                                continue
+                            vx = pos[v, 0]
+                            vy = pos[v, 1]
+                            vz = pos[v, 2]
+                            v1 = v + 1 if v < n - 1 else 0
+                            wx = pos[v1, 0]
+                            wy = pos[v1, 1]
+                            wz = pos[v1, 2]
+                            # bead rule: fixed bead v against moved bead b
+                            if mode == 0:
+                                sep = v - b
+                                if sep < 0:
+                                    sep = -sep
+                                if n - sep < sep:
+                                    sep = n - sep
+                                if sep >= 2:
+                                    ddx = vx - px
+                                    ddy = vy - py
+                                    ddz = vz - pz
+                                    if ddx * ddx + ddy * ddy + ddz * ddz < d2:
+                                        ok = False
+                                        break
+                            mvx = 0.5 * (vx + wx)
+                            mvy = 0.5 * (vy + wy)
+                            mvz = 0.5 * (vz + wz)
+                            # segment A = (b-1, b) against fixed segment v (skip if bonded)
+                            if v1 != sa and v != b:
+                                ddx = mvx - amx
+                                ddy = mvy - amy
+                                ddz = mvz - amz
+                                if ddx * ddx + ddy * ddy + ddz * ddz <= lim_mid2:
+                                    dn2 = seg_dist2(ppx, ppy, ppz, px, py, pz,
+                                                    vx, vy, vz, wx, wy, wz)
+                                    if dn2 < w2:
+                                        ok = False
+                                        break
+                                    if dn2 <= lmove * lmove:
+                                        do2 = seg_dist2(opx, opy, opz,
+                                                        pos[b, 0], pos[b, 1], pos[b, 2],
+                                                        vx, vy, vz, wx, wy, wz)
+                                        if math.sqrt(do2) + math.sqrt(dn2) <= lmove:
+                                            ok = False
+                                            break
+                            # segment B = (b, k) for the last moved bead
+                            if last and v != k and v1 != b:
+                                ddx = mvx - bmx
+                                ddy = mvy - bmy
+                                ddz = mvz - bmz
+                                if ddx * ddx + ddy * ddy + ddz * ddz <= lim_mid2:
+                                    dn2 = seg_dist2(px, py, pz, kx, ky, kz,
+                                                    vx, vy, vz, wx, wy, wz)
+                                    if dn2 < w2:
+                                        ok = False
+                                        break
+                                    if dn2 <= lmove * lmove:
+                                        do2 = seg_dist2(pos[b, 0], pos[b, 1], pos[b, 2],
+                                                        kx, ky, kz, vx, vy, vz, wx, wy, wz)
+                                        if math.sqrt(do2) + math.sqrt(dn2) <= lmove:
+                                            ok = False
+                                            break
+                            v = nxt[v]
+        if not ok:
+            continue
+        # ---- accept ----------------------------------------------------------------------
+        cnt[C_ACCEPTED + cls] += 1
+        de_total += de
+        for q in range(m):
+            b = j + 1 + q
+            if b >= n:
+                b -= n
+            pos[b, 0] = newpos[q, 0]
+            pos[b, 1] = newpos[q, 1]
+            pos[b, 2] = newpos[q, 2]
+        for q in range(m + 1):
+            v = j + q
+            if v >= n:
+                v -= n
+            v1 = v + 1 if v < n - 1 else 0
+            h = _hash(
+                np.int64(math.floor(0.5 * (pos[v, 0] + pos[v1, 0]) * inv)),
+                np.int64(math.floor(0.5 * (pos[v, 1] + pos[v1, 1]) * inv)),
+                np.int64(math.floor(0.5 * (pos[v, 2] + pos[v1, 2]) * inv)),
+                mask,
+            )
+            _cell_update(v, h, head, nxt, prv, bucket)
+    rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
+    return de_total
+
+
+@njit(cache=True)
+def check_state(pos, mode, d, w):
+    """Brute-force O(N²) check of the exclusion rule; returns the worst violation (≤ 0 is ok).
+
+    bead mode: max over pairs at cyclic distance ≥ 2 of (d − distance);
+    tube mode: max over segment pairs sharing no bead of (w − distance).
+    """
+    n = pos.shape[0]
+    worst = -np.inf
+    if mode == 0:
+        for a in range(n):
+            for b in range(a + 2, n):
+                if a == 0 and b == n - 1:
+                    continue
+                dx = pos[a, 0] - pos[b, 0]
+                dy = pos[a, 1] - pos[b, 1]
+                dz = pos[a, 2] - pos[b, 2]
+                v = d - math.sqrt(dx * dx + dy * dy + dz * dz)
+                if v > worst:
+                    worst = v
+    else:
+        for a in range(n):
+            a1 = a + 1 if a < n - 1 else 0
+            for b in range(a + 2, n):
+                if a == 0 and b == n - 1:
+                    continue
+                b1 = b + 1 if b < n - 1 else 0
+                dd = seg_dist2(pos[a, 0], pos[a, 1], pos[a, 2], pos[a1, 0], pos[a1, 1],
+                               pos[a1, 2], pos[b, 0], pos[b, 1], pos[b, 2], pos[b1, 0],
+                               pos[b1, 1], pos[b1, 2])
+                v = w - math.sqrt(dd)
+                if v > worst:
+                    worst = v
+    return worst
+
+
+@njit(cache=True)
+def min_nonadjacent_segment_distance(pos):
+    """Minimum distance between segments of a closed chain that share no bead (O(N²))."""
+    n = pos.shape[0]
+    best = np.inf
+    for a in range(n):
+        a1 = a + 1 if a < n - 1 else 0
+        for b in range(a + 2, n):
+            if a == 0 and b == n - 1:
+                continue
+            b1 = b + 1 if b < n - 1 else 0
+            dd = seg_dist2(pos[a, 0], pos[a, 1], pos[a, 2], pos[a1, 0], pos[a1, 1], pos[a1, 2],
+                           pos[b, 0], pos[b, 1], pos[b, 2], pos[b1, 0], pos[b1, 1], pos[b1, 2])
+            if dd < best:
+                best = dd
+    return math.sqrt(best)

@@ -1,0 +1,160 @@
+"""The Monte Carlo state: a closed chain, its cell list and its move parameters.
+
+Thin Python layer over :mod:`stiffknots.engine.kernel` (validation here, computation there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from stiffknots.engine import kernel as K
+
+EXCLUSION_MODELS = ("bead", "tube")
+
+
+@dataclass(frozen=True)
+class MoveParams:
+    """Parameters of the crankshaft moves and of the exclusion model (units: bond length 1).
+
+    Attributes
+    ----------
+    delta : angle of the paper's single-bead move (±delta), default π/100 (§VII).
+    p_single : probability that a move is the paper's single-bead move.
+    m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
+        multi-bead moves and leaves exactly the paper's move).
+    phi_max : largest rotation angle of a multi-bead move (radians).
+    l_cap : largest displacement of any point during a multi-bead move; the angle is limited
+        to l_cap / ρ_max, ρ_max the largest distance of a moved bead from the axis.
+    exclusion : ``"bead"`` (no two beads at index distance ≥ 2 closer than ``d``; the paper's
+        rule, d = 1/√2) or ``"tube"`` (no two segments sharing no bead closer than ``w``).
+    d : bead exclusion distance.
+    w : tube diameter (``tube`` model only).
+    """
+
+    delta: float = float(np.pi / 100)
+    p_single: float = 0.5
+    m_max: int = 40
+    phi_max: float = 0.6
+    l_cap: float = 0.5
+    exclusion: str = "bead"
+    d: float = float(1 / np.sqrt(2))
+    w: float = float(1 / np.sqrt(2))
+
+    def validate(self, n_beads: int) -> None:
+        if self.exclusion not in EXCLUSION_MODELS:
+            raise ValueError(
+                f"unknown exclusion model {self.exclusion!r}; allowed: {', '.join(EXCLUSION_MODELS)}"
+            )
+        if not 0 < self.delta < 0.5:
+            raise ValueError(f"delta must be in (0, 0.5) rad, got {self.delta}")
+        if not 0 <= self.p_single <= 1:
+            raise ValueError(f"p_single must be in [0, 1], got {self.p_single}")
+        if self.m_max < 1:
+            raise ValueError(f"m_max must be ≥ 1, got {self.m_max}")
+        if not 0 < self.d < 1 or not 0 < self.w < 1:
+            raise ValueError("exclusion distances d and w must lie in (0, 1) bond lengths")
+        if n_beads < 8:
+            raise ValueError(f"a chain needs at least 8 beads, got {n_beads}")
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    @property
+    def cell(self) -> float:
+        """Cell side: the reach of the single-bead move's checks (see kernel docstring)."""
+        wt = self.w if self.exclusion == "tube" else 0.0
+        return max(1.5 + max(wt, self.delta), self.d + 0.5)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        ip = np.zeros(K.I_NIPAR, dtype=np.int64)
+        fp = np.zeros(K.F_NFPAR, dtype=np.float64)
+        ip[K.I_MODE] = EXCLUSION_MODELS.index(self.exclusion)
+        ip[K.I_MMAX] = self.m_max
+        fp[K.F_DELTA] = self.delta
+        fp[K.F_PSINGLE] = self.p_single if self.m_max > 1 else 1.0
+        fp[K.F_PHIMAX] = self.phi_max
+        fp[K.F_LCAP] = self.l_cap
+        fp[K.F_D] = self.d
+        fp[K.F_W] = self.w if self.exclusion == "tube" else 0.0
+        fp[K.F_CELL] = self.cell
+        return ip, fp
+
+
+class ChainState:
+    """A closed unit-bond chain prepared for the kernel.
+
+    Parameters
+    ----------
+    coords : (N, 3) closed chain with unit bonds that satisfies the exclusion model.
+    params : move and exclusion parameters.
+    """
+
+    def __init__(self, coords: np.ndarray, params: MoveParams | None = None, seed: int = 0):
+        pos = np.array(coords, dtype=np.float64, order="C", copy=True)
+        if pos.ndim != 2 or pos.shape[1] != 3:
+            raise ValueError(f"coords must have shape (N, 3), got {pos.shape}")
+        self.params = params or MoveParams()
+        self.params.validate(pos.shape[0])
+        bonds = np.linalg.norm(np.roll(pos, -1, axis=0) - pos, axis=1)
+        if np.max(np.abs(bonds - 1.0)) > 1e-8:
+            raise ValueError(
+                f"bonds must have unit length (worst {np.max(np.abs(bonds - 1)):.2e}); "
+                "use an embedding from stiffknots.knots"
+            )
+        self.pos = pos
+        self.ipar, self.fpar = self.params.arrays()
+        n = pos.shape[0]
+        size = 1 << max(10, int(np.ceil(np.log2(8 * n))))
+        self.head = np.empty(size, dtype=np.int64)
+        self.nxt = np.empty(n, dtype=np.int64)
+        self.prv = np.empty(n, dtype=np.int64)
+        self.bucket = np.empty(n, dtype=np.int64)
+        self.newpos = np.empty((max(2, self.params.m_max), 3), dtype=np.float64)
+        self.counters = np.zeros(K.C_NCNT, dtype=np.int64)
+        self.rng = K.new_rng_state(seed)
+        K.cell_build(self.pos, self.params.cell, self.head, self.nxt, self.prv, self.bucket)
+        self.energy = float(K.energy_closed(self.pos))
+        viol = self.violation()
+        if viol > 1e-12:
+            raise ValueError(
+                f"the chain violates the {self.params.exclusion} exclusion rule by {viol:.3g}"
+            )
+
+    @property
+    def n_beads(self) -> int:
+        return self.pos.shape[0]
+
+    @property
+    def epsilon(self) -> float:
+        """ε = E_d·N/C (paper §VII; bond length 1, so L = N)."""
+        return self.energy * self.n_beads
+
+    def run(self, n_moves: int, temperature: float) -> float:
+        """Attempt ``n_moves`` moves at ``temperature``; returns the energy change."""
+        de = K.run_moves(self.pos, int(n_moves), float(temperature), self.ipar, self.fpar,
+                         self.head, self.nxt, self.prv, self.bucket, self.newpos, self.counters,
+                         self.rng)
+        self.energy += de
+        return de
+
+    def recomputed_energy(self) -> float:
+        return float(K.energy_closed(self.pos))
+
+    def violation(self) -> float:
+        p = self.params
+        mode = EXCLUSION_MODELS.index(p.exclusion)
+        return float(K.check_state(self.pos, mode, p.d, p.w))
+
+    def acceptance(self) -> dict:
+        c = self.counters
+        out = {}
+        for cls, name in ((0, "single"), (1, "multi")):
+            tried = int(c[K.C_TRIED + cls])
+            out[name] = {
+                "tried": tried,
+                "accepted": int(c[K.C_ACCEPTED + cls]),
+                "rate": (c[K.C_ACCEPTED + cls] / tried) if tried else 0.0,
+            }
+        return out
