@@ -70,7 +70,8 @@ F_LCAP = 3  # largest displacement of any point in a multi-bead move
 F_D = 4  # bead exclusion distance
 F_W = 5  # tube diameter
 F_CELL = 6  # cell side
-F_NFPAR = 7
+F_LMIN = 7  # smallest displacement scale of a multi-bead move
+F_NFPAR = 8
 
 # counters (``cnt``), per move class: 0 = single bead, 1 = multi-bead
 C_TRIED = 0
@@ -231,6 +232,8 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
     p_single = fpar[F_PSINGLE]
     phi_max = fpar[F_PHIMAX]
     l_cap = fpar[F_LCAP]
+    l_min = fpar[F_LMIN]
+    log_span = math.log(l_cap / l_min) if l_cap > l_min else 0.0
     d2 = fpar[F_D] * fpar[F_D]
     w = fpar[F_W]
     w2 = w * w
@@ -300,9 +303,13 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
                 s = -sd
                 phi = delta
         else:
+            # displacement scale log-uniform in [l_min, l_cap]: large moves early, fine
+            # ones late (a mixture of symmetric proposals is symmetric)
+            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+            scale = l_cap * math.exp(-u * log_span)
             lim = phi_max
-            if rho * lim > l_cap:
-                lim = l_cap / rho
+            if rho * lim > scale:
+                lim = scale / rho
             u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
             phi = (2.0 * u - 1.0) * lim
             c = math.cos(phi)

@@ -25,8 +25,9 @@ class MoveParams:
     m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
         multi-bead moves and leaves exactly the paper's move).
     phi_max : largest rotation angle of a multi-bead move (radians).
-    l_cap : largest displacement of any point during a multi-bead move; the angle is limited
-        to l_cap / ρ_max, ρ_max the largest distance of a moved bead from the axis.
+    l_cap, l_min : a multi-bead move first draws a displacement scale ℓ log-uniformly in
+        [l_min, l_cap], then an angle uniform in ±min(phi_max, ℓ/ρ_max), ρ_max the largest
+        distance of a moved bead from the axis; no point moves farther than l_cap.
     exclusion : ``"bead"`` (no two beads at index distance ≥ 2 closer than ``d``; the paper's
         rule, d = 1/√2) or ``"tube"`` (no two segments sharing no bead closer than ``w``).
     d : bead exclusion distance.
@@ -38,6 +39,7 @@ class MoveParams:
     m_max: int = 40
     phi_max: float = 0.6
     l_cap: float = 0.5
+    l_min: float = 0.5
     exclusion: str = "bead"
     d: float = float(1 / np.sqrt(2))
     w: float = float(1 / np.sqrt(2))
@@ -53,6 +55,8 @@ class MoveParams:
             raise ValueError(f"p_single must be in [0, 1], got {self.p_single}")
         if self.m_max < 1:
             raise ValueError(f"m_max must be ≥ 1, got {self.m_max}")
+        if not 0 < self.l_min <= self.l_cap:
+            raise ValueError(f"need 0 < l_min ≤ l_cap, got {self.l_min}, {self.l_cap}")
         if not 0 < self.d < 1 or not 0 < self.w < 1:
             raise ValueError("exclusion distances d and w must lie in (0, 1) bond lengths")
         if n_beads < 8:
@@ -76,6 +80,7 @@ class MoveParams:
         fp[K.F_PSINGLE] = self.p_single if self.m_max > 1 else 1.0
         fp[K.F_PHIMAX] = self.phi_max
         fp[K.F_LCAP] = self.l_cap
+        fp[K.F_LMIN] = self.l_min
         fp[K.F_D] = self.d
         fp[K.F_W] = self.w if self.exclusion == "tube" else 0.0
         fp[K.F_CELL] = self.cell

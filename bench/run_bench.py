@@ -1,0 +1,16 @@
+"""Full benchmark run (make bench): prints numbers and writes bench/last_run.json.
+
+10 seeds per target, both cores (each run single-threaded on one core).
+"""
+
+import json
+import sys
+from pathlib import Path
+
+from stiffknots.engine.benchmark import run_benchmarks
+
+if __name__ == "__main__":
+    seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 10
+    d = run_benchmarks(budget=600, seeds=seeds, log=print)
+    print(json.dumps(d, indent=2))
+    Path(__file__).with_name("last_run.json").write_text(json.dumps(d, indent=2))

@@ -1,0 +1,223 @@
+"""``stiffknots.anneal``: any knot of the catalogue to a verified minimum-energy chain.
+
+Composes catalogue → embedding → engine (replicas on all cores) → verification. Every replica
+is verified: energy recomputed from scratch equals the incremental one, bonds are unit, the
+exclusion rule holds, and the knot type (HOMFLY-PT via topoly) equals the requested one — a
+changed topology raises :class:`~stiffknots.engine.driver.TopologyChangedError`.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing as mp
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from stiffknots._version import __version__
+from stiffknots.engine.driver import (
+    AnnealSettings,
+    ReplicaResult,
+    TopologyChangedError,
+    default_workers,
+    replica_seeds,
+    run_replica,
+)
+from stiffknots.engine.schedules import Schedule
+from stiffknots.engine.state import MoveParams
+
+DEFAULT_MOVES = 20_000_000
+
+
+@dataclass
+class AnnealResult:
+    """Replicas of one knot, best first. ``interrupted`` is True when Ctrl-C stopped the run
+    (finished replicas are kept)."""
+
+    knot: str
+    beads: int
+    seed: int
+    settings: dict
+    replicas: list[ReplicaResult]
+    wall_time: float
+    interrupted: bool = False
+    version: str = __version__
+    bounds: dict = field(default_factory=dict)
+
+    @property
+    def best(self) -> ReplicaResult:
+        if not self.replicas:
+            raise RuntimeError("no replica finished")
+        return self.replicas[0]
+
+    @property
+    def epsilon(self) -> float:
+        return self.best.epsilon
+
+    def to_dict(self) -> dict:
+        return {
+            "knot": self.knot,
+            "beads": self.beads,
+            "seed": self.seed,
+            "epsilon": self.best.epsilon if self.replicas else None,
+            "knot_verified": all(r.knot_verified for r in self.replicas),
+            "settings": self.settings,
+            "bounds": self.bounds,
+            "wall_time": self.wall_time,
+            "interrupted": self.interrupted,
+            "version": self.version,
+            "replicas": [r.summary() for r in self.replicas],
+        }
+
+    def save(self, out: str | Path) -> dict[str, Path]:
+        """Write ``result.json``, the best chain as ``best.xyz``/``best.json``, every replica's
+        chain as ``replica_K.xyz``, the annealing traces as ``traces.npz``."""
+        from stiffknots.chain import Chain, save
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = {"result": out / "result.json"}
+        paths["result"].write_text(json.dumps(self.to_dict(), indent=2, default=_jsonable))
+        for r in self.replicas:
+            meta = {"knot": self.knot, "seed": r.seed, "epsilon": r.epsilon,
+                    "version": self.version, "settings": self.settings}
+            save(Chain(r.coords, closed=True, meta=meta), out / f"replica_{r.replica}.xyz")
+        best = self.best
+        meta = {"knot": self.knot, "seed": best.seed, "epsilon": best.epsilon,
+                "version": self.version, "settings": self.settings}
+        save(Chain(best.coords, closed=True, meta=meta), out / "best.xyz")
+        save(Chain(best.coords, closed=True, meta=meta), out / "best.json")
+        paths["best_xyz"] = out / "best.xyz"
+        paths["best_json"] = out / "best.json"
+        np.savez_compressed(
+            out / "traces.npz",
+            **{f"r{r.replica}_{k}": getattr(r, f"trace_{k}")
+               for r in self.replicas for k in ("moves", "temperature", "epsilon", "seconds")},
+        )
+        paths["traces"] = out / "traces.npz"
+        return paths
+
+
+def _jsonable(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(f"not JSON serialisable: {type(x)}")
+
+
+def _replica_job(coords, settings, seed, replica, knot_name):
+    """Worker: anneal one replica and verify its knot type."""
+    from stiffknots.knots.identify import verify_knot
+
+    res = run_replica(coords, settings, seed, replica)
+    ok, found = verify_knot(res.coords, knot_name)
+    res.knot = found
+    res.knot_verified = bool(ok)
+    return res
+
+
+def anneal(
+    knot: str,
+    beads: int = 150,
+    moves: int = DEFAULT_MOVES,
+    replicas: int = 2,
+    seed: int = 0,
+    *,
+    schedule: Schedule | None = None,
+    params: MoveParams | None = None,
+    workers: int | None = None,
+    quench_fraction: float = 0.1,
+    target_epsilon: float | None = None,
+    on_replica_done: Callable[[ReplicaResult], None] | None = None,
+) -> AnnealResult:
+    """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
+
+    Parameters
+    ----------
+    knot : knot name in any usual spelling ('4_1', '4.1', 'K11a1', 'T(2,3)').
+    beads : number of beads N (bond length 1, so the chain length L = N).
+    moves : attempted moves per replica (annealing plus the final quench).
+    replicas : independent replicas; they run in parallel on ``workers`` processes
+        (default: all cores).
+    seed : user seed; replica seeds are derived from it (recorded in every result).
+    schedule, params : cooling schedule and move/exclusion parameters (defaults documented in
+        :class:`Schedule` and :class:`MoveParams`).
+    quench_fraction : fraction of the moves spent in the final T = 0 quench.
+    target_epsilon : if given, each replica records the wall time at which ε first fell below.
+    on_replica_done : callback called in the parent process as each replica finishes.
+
+    Returns
+    -------
+    AnnealResult
+        Replicas sorted by ε (best first); ε = E_d·N/C (paper §VII).
+
+    Raises
+    ------
+    UnknownKnotError, EmbeddingError, ValueError
+        For a wrong knot name, too few beads (the message gives the minimum), bad parameters.
+    TopologyChangedError
+        If any replica ends with a different knot type (never expected; see the kernel docs).
+    """
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.embedding import embed_braid
+    from stiffknots.theory.bounds import closed_bounds
+
+    k = get_knot(knot)
+    if replicas < 1:
+        raise ValueError(f"replicas must be ≥ 1, got {replicas}")
+    settings = AnnealSettings(moves=int(moves), schedule=schedule or Schedule(),
+                              params=params or MoveParams(), quench_fraction=quench_fraction,
+                              target_epsilon=target_epsilon)
+    settings.validate()
+    settings.params.validate(beads)
+    word = k.braid_word or ()
+    coords = embed_braid(word, n_strands=k.braid_strands if word else None, n_beads=beads)
+    seeds = replica_seeds(seed, replicas)
+    nw = workers or default_workers(replicas)
+    results: list[ReplicaResult] = []
+    interrupted = False
+    t0 = time.perf_counter()
+    if nw == 1:
+        try:
+            for r, s in enumerate(seeds):
+                res = _replica_job(coords, settings, s, r, k.name)
+                results.append(res)
+                if on_replica_done:
+                    on_replica_done(res)
+        except KeyboardInterrupt:
+            interrupted = True
+    else:
+        ctx = mp.get_context("spawn")
+        ex = ProcessPoolExecutor(max_workers=nw, mp_context=ctx)
+        futs = [ex.submit(_replica_job, coords, settings, s, r, k.name)
+                for r, s in enumerate(seeds)]
+        try:
+            for f in as_completed(futs):
+                res = f.result()
+                results.append(res)
+                if on_replica_done:
+                    on_replica_done(res)
+            ex.shutdown(wait=True)
+        except KeyboardInterrupt:
+            interrupted = True
+            for f in futs:
+                f.cancel()
+            ex.shutdown(wait=False, cancel_futures=True)
+    results.sort(key=lambda r: r.epsilon)
+    bad = [r for r in results if not r.knot_verified]
+    if bad:
+        raise TopologyChangedError(
+            f"{len(bad)} replica(s) of {k.name} ended as {', '.join(r.knot for r in bad)}; "
+            "this is a bug in the engine, please report it with the seed "
+            f"{seed} and the settings"
+        )
+    b = closed_bounds(k.bridge_number, k.braid_index)
+    bounds = {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
+    return AnnealResult(knot=k.name, beads=beads, seed=seed, settings=settings.as_dict(),
+                        replicas=results, wall_time=time.perf_counter() - t0,
+                        interrupted=interrupted, bounds=bounds)

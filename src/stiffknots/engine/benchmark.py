@@ -1,0 +1,147 @@
+"""Benchmarks that print numbers (never timed assertions): move rates and time to target.
+
+* moves per second: attempted paper single-bead moves (±π/100, bead exclusion, strand-passage
+  guard on) on one core, on a chain first annealed to a compact low-temperature state, then
+  measured at T = 1e-4;
+* a plain-numpy implementation of the same move (vectorised O(N) exclusion test, as one writes
+  it in an afternoon), measured in the same run: the ratio;
+* seconds on one core until 4_1 reaches ε ≤ 129.6 and 3_1 reaches ε ≤ 79.1 at N = 150 with
+  the default annealing settings, over several seeds (median and worst; runs that never reach
+  the target count as infinite).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+from stiffknots.engine.driver import AnnealSettings, run_replica
+from stiffknots.engine.state import ChainState, MoveParams
+
+TARGETS = {"4_1": 129.6, "3_1": 79.1}
+MEASURE_T = 1e-4
+
+
+def _chain(name: str, n: int) -> np.ndarray:
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.embedding import embed_braid
+
+    k = get_knot(name)
+    return embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=n)
+
+
+def compact_state(name: str = "4_1", n: int = 150, moves: int | None = None,
+                  seed: int = 1) -> ChainState:
+    """A chain annealed with the full move set (power-law cooling to ``MEASURE_T``), then
+    handed back with the paper's single-bead move only, for measuring."""
+    x = _chain(name, n)
+    st = ChainState(x, MoveParams(), seed=seed)
+    moves = moves or max(4_000_000, 4000 * n)
+    for c in range(20):
+        st.run(moves // 20, 1e-2 * (1 + c) ** -2.0 + MEASURE_T)
+    return ChainState(st.pos, MoveParams(m_max=1, p_single=1.0), seed=seed)
+
+
+def kernel_rate(st: ChainState, seconds: float = 1.0) -> float:
+    """Attempted single-bead moves per second at ``MEASURE_T`` (paper move, one core)."""
+    st.run(10_000, MEASURE_T)  # warm
+    n = 200_000
+    while True:
+        t0 = time.perf_counter()
+        st.run(n, MEASURE_T)
+        dt = time.perf_counter() - t0
+        if dt > seconds or n > 2e9:
+            return n / dt
+        n = int(n * max(2.0, 1.2 * seconds / max(dt, 1e-6)))
+
+
+def plain_numpy_rate(coords: np.ndarray, moves: int = 20_000, temperature: float = MEASURE_T,
+                     delta: float = math.pi / 100, d: float = 1 / math.sqrt(2),
+                     seed: int = 0) -> float:
+    """The same single-bead move written in plain numpy (no compilation, O(N) exclusion)."""
+    rng = np.random.default_rng(seed)
+    pos = np.array(coords, dtype=float)
+    n = len(pos)
+    idx = np.arange(n)
+    t0 = time.perf_counter()
+    for _ in range(moves):
+        i = rng.integers(n)
+        a, b = pos[(i - 1) % n], pos[(i + 1) % n]
+        e = (b - a) / np.linalg.norm(b - a)
+        phi = delta if rng.random() < 0.5 else -delta
+        r = pos[i] - a
+        new = a + r * np.cos(phi) + np.cross(e, r) * np.sin(phi) + e * np.dot(e, r) * (
+            1 - np.cos(phi))
+        u_prev = a - pos[(i - 2) % n]
+        u_next = pos[(i + 2) % n] - b
+        old_e = -np.dot(u_prev, pos[i] - a) - np.dot(b - pos[i], u_next)
+        new_e = -np.dot(u_prev, new - a) - np.dot(b - new, u_next)
+        de = new_e - old_e
+        if de > 0 and rng.random() >= np.exp(-de / temperature):
+            continue
+        sep = np.abs(idx - i)
+        sep = np.minimum(sep, n - sep)
+        dist = np.linalg.norm(pos - new, axis=1)
+        if np.any(dist[sep >= 2] < d):
+            continue
+        pos[i] = new
+    return moves / (time.perf_counter() - t0)
+
+
+def _time_to_target(args) -> tuple[str, int, float, float]:
+    name, seed, moves = args
+    settings = AnnealSettings(moves=moves, target_epsilon=TARGETS[name])
+    res = run_replica(_chain(name, 150), settings, seed)
+    hit = res.seconds_to_target
+    return name, seed, (math.inf if hit is None else hit), res.epsilon
+
+
+def run_benchmarks(budget: float = 60.0, seeds: int | None = None, workers: int = 2,
+                   sizes: tuple[int, ...] = (150, 1000, 10000),
+                   log: Callable[[str], None] | None = None) -> dict:
+    """Run all benchmarks within roughly ``budget`` seconds; return a JSON-able dict."""
+    t_all = time.perf_counter()
+    say = log or (lambda s: None)
+    rates = {}
+    for n in sizes:
+        st = compact_state("4_1", n)
+        rates[n] = kernel_rate(st, seconds=min(2.0, budget / 30))
+        say(f"N = {n}: {rates[n]:,.0f} moves/s (ε = {st.epsilon:.1f})")
+    st = compact_state("4_1", 150)
+    numpy_rate = plain_numpy_rate(st.pos, moves=5000 if budget < 120 else 20000)
+    ratio = rates[sizes[0]] / numpy_rate
+    say(f"plain numpy: {numpy_rate:,.0f} moves/s → ratio {ratio:.0f}×")
+    if seeds is None:
+        seeds = 10 if budget >= 150 else 2
+    jobs = [(name, s, 20_000_000) for name in TARGETS for s in range(1, seeds + 1)]
+    with ProcessPoolExecutor(max_workers=workers) as ex:
+        got = list(ex.map(_time_to_target, jobs))
+    stt = {}
+    for name in TARGETS:
+        ts = sorted(t for nm, _, t, _ in got if nm == name)
+        eps = [e for nm, _, _, e in got if nm == name]
+        stt[name] = {
+            "target": TARGETS[name],
+            "seeds": len(ts),
+            "median_s": float(np.median(ts)),
+            "worst_s": float(max(ts)),
+            "reached": int(sum(np.isfinite(ts))),
+            "final_epsilon_best": float(min(eps)),
+            "final_epsilon_median": float(np.median(eps)),
+        }
+        say(f"{name}: ε ≤ {TARGETS[name]} reached by {stt[name]['reached']}/{len(ts)} seeds, "
+            f"median {stt[name]['median_s']:.2f} s, worst {stt[name]['worst_s']:.2f} s")
+    per_move_ratio = rates[sizes[0]] / rates[sizes[-1]]
+    return {
+        "moves_per_second": {str(n): r for n, r in rates.items()},
+        "per_move_cost_ratio_largest_vs_150": per_move_ratio,
+        "plain_numpy_moves_per_second": numpy_rate,
+        "plain_numpy_ratio": ratio,
+        "seconds_to_target": stt,
+        "measure_temperature": MEASURE_T,
+        "wall_time": time.perf_counter() - t_all,
+    }
