@@ -1,0 +1,78 @@
+"""The command line on good and bad input (exit code 2 and one line on stderr for mistakes)."""
+
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+
+def run(*args):
+    p = subprocess.run([sys.executable, "-m", "stiffknots.cli", *args], capture_output=True,
+                       text=True, timeout=600)
+    return p.returncode, p.stdout, p.stderr
+
+
+def test_knot_json():
+    rc, out, err = run("knot", "4_1", "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    assert d["name"] == "4_1" and d["crossing_number"] == 4
+    assert d["bridge_number"] == 2 and d["braid_index"] == 3
+    assert d["lower_bound"] == pytest.approx(8 * math.pi**2)
+    assert d["upper_bound"] == pytest.approx(18 * math.pi**2)
+    assert d["predicted_ground_state"] is None
+
+
+def test_knot_torus_ground_state():
+    rc, out, _ = run("knot", "T(2,3)", "--json")
+    d = json.loads(out)
+    assert d["name"] == "3_1"
+    assert d["predicted_ground_state"]["shape"] == "CB"
+    assert d["predicted_ground_state"]["epsilon"] == pytest.approx(8 * math.pi**2)
+
+
+def test_elastica_json(tmp_path):
+    rc, out, err = run("elastica", "--json", "--out", str(tmp_path))
+    assert rc == 0, err
+    d = json.loads(out)
+    for k in ("alpha_loop", "eps_loop", "alpha_8", "eps_8", "eps_80", "alpha"):
+        assert k in d
+    assert d["eps_80"] == pytest.approx((math.sqrt(d["eps_8"]) + math.sqrt(2) * math.pi) ** 2)
+    assert max(d["cross_check"].values()) < 1e-9
+    assert (tmp_path / "elastica.png").stat().st_size > 10_000
+
+
+def test_families_json():
+    rc, out, _ = run("families", "--max-crossings", "10", "--json")
+    d = json.loads(out)
+    assert d["total"] == 249
+    assert d["n_equals_i"] == len(d["knots"]) and "3_1" in d["knots"]
+    assert 0.15 < d["fraction"] < 0.25  # paper: ≈ 20 % of prime knots with n_c < 11
+
+
+@pytest.mark.parametrize(
+    "args",
+    [("knot", "4_9"), ("knot", "T(2,4)"), ("families", "--max-crossings", "20"),
+     ("anneal", "4_1", "--beads", "4"), ("anneal", "4_1", "--exclusion", "soft"),
+     ("anneal", "nonsense_knot"), ("anneal", "8_19", "--beads", "20")],
+)
+def test_user_mistakes_exit_2_one_line(args):
+    rc, out, err = run(*args)
+    assert rc == 2
+    assert "Traceback" not in err
+    assert err.strip().startswith("error:")
+
+
+def test_anneal_json_small(tmp_path):
+    rc, out, err = run("anneal", "3_1", "--moves", "300000", "--replicas", "2", "--json",
+                       "--out", str(tmp_path))
+    assert rc == 0, err
+    d = json.loads(out)
+    assert d["knot"] == "3_1" and d["knot_verified"]
+    assert len(d["replicas"]) == 2
+    assert d["epsilon"] == min(r["epsilon"] for r in d["replicas"])
+    assert d["epsilon"] >= d["bounds"]["lower"] * 0.99
+    for f in ("result.json", "best.xyz", "best.json", "best.png"):
+        assert (tmp_path / f).exists()

@@ -1,0 +1,136 @@
+"""Physics checks of the Monte Carlo engine (paper §VII): energy bookkeeping, bonds, exclusion,
+topology preservation, schedules, reproducibility."""
+
+import math
+
+import numpy as np
+import pytest
+
+from stiffknots.engine import kernel as K
+from stiffknots.engine.driver import AnnealSettings, run_replica
+from stiffknots.engine.schedules import Schedule
+from stiffknots.engine.state import ChainState, MoveParams
+from stiffknots.knots.catalogue import get_knot
+from stiffknots.knots.embedding import embed_braid
+from stiffknots.knots.identify import identify
+
+
+def chain(name, n=150):
+    k = get_knot(name)
+    return embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=n)
+
+
+def bonds(pos):
+    return np.linalg.norm(np.roll(pos, -1, axis=0) - pos, axis=1)
+
+
+def test_energy_formula_circle():
+    n = 150
+    r = 0.5 / math.sin(math.pi / n)
+    t = 2 * math.pi * np.arange(n) / n
+    pos = np.c_[r * np.cos(t), r * np.sin(t), np.zeros(n)]
+    st = ChainState(pos)
+    assert st.epsilon == pytest.approx(n * n * (1 - math.cos(2 * math.pi / n)), rel=1e-12)
+    assert abs(st.epsilon - 2 * math.pi**2) < 0.01  # ε → 2π² (circle)
+
+
+@pytest.mark.parametrize("exclusion", ["bead", "tube"])
+@pytest.mark.parametrize("temperature", [1e-1, 1e-3, 0.0])
+def test_incremental_energy_bonds_exclusion(exclusion, temperature):
+    st = ChainState(chain("5_2"), MoveParams(exclusion=exclusion), seed=7)
+    for _ in range(5):
+        st.run(100_000, temperature)
+        assert st.energy == pytest.approx(st.recomputed_energy(), rel=1e-10, abs=1e-10)
+        assert np.max(np.abs(bonds(st.pos) - 1)) < 1e-10
+        assert st.violation() <= 1e-12
+    acc = st.acceptance()
+    assert acc["single"]["tried"] > 0 and acc["multi"]["tried"] > 0
+
+
+def test_paper_move_moves_one_bead():
+    st = ChainState(chain("3_1"), MoveParams(m_max=1, p_single=1.0), seed=3)
+    before = st.pos.copy()
+    for _ in range(200):
+        prev = st.pos.copy()
+        st.run(1, 1.0)
+        moved = np.nonzero(np.any(st.pos != prev, axis=1))[0]
+        assert len(moved) <= 1
+        if len(moved) == 1:  # rotation by ±δ about the axis through the two neighbours
+            i = moved[0]
+            n = len(prev)
+            a, b = prev[(i - 1) % n], prev[(i + 1) % n]
+            e = (b - a) / np.linalg.norm(b - a)
+            r0 = prev[i] - a - np.dot(prev[i] - a, e) * e
+            r1 = st.pos[i] - a - np.dot(st.pos[i] - a, e) * e
+            ang = math.acos(np.clip(np.dot(r0, r1) / np.dot(r0, r0), -1, 1))
+            assert ang == pytest.approx(math.pi / 100, abs=1e-9)
+    assert np.any(st.pos != before)
+
+
+def test_reproducible_from_seed():
+    a = ChainState(chain("4_1"), seed=11)
+    b = ChainState(chain("4_1"), seed=11)
+    c = ChainState(chain("4_1"), seed=12)
+    for s in (a, b, c):
+        s.run(200_000, 1e-2)
+    assert np.array_equal(a.pos, b.pos)
+    assert not np.array_equal(a.pos, c.pos)
+
+
+def test_rng_uniform():
+    u = K.uniforms(K.new_rng_state(5), 200_000)
+    assert 0 <= u.min() and u.max() < 1
+    assert abs(u.mean() - 0.5) < 0.005 and abs(u.var() - 1 / 12) < 0.002
+
+
+def test_schedules():
+    for kind in ("power", "geometric"):
+        s = Schedule(kind=kind, t_start=1e-2, t_end=1e-6)
+        x = np.linspace(0, 1, 101)
+        t = s.temperature(x)
+        assert t[0] == pytest.approx(1e-2) and t[-1] == pytest.approx(1e-6)
+        assert np.all(np.diff(t) < 0)
+    with pytest.raises(ValueError):
+        Schedule(t_start=1e-6, t_end=1e-2).validate()
+
+
+def test_bad_parameters_clear_errors():
+    with pytest.raises(ValueError, match="exclusion"):
+        ChainState(chain("3_1"), MoveParams(exclusion="soft"))
+    with pytest.raises(ValueError, match="unit length"):
+        ChainState(chain("3_1") * 1.1)
+
+
+def _fuzz(name, temperature, moves, params, seed):
+    st = ChainState(chain(name), params, seed=seed)
+    start = identify(st.pos)
+    steps = 10
+    for _ in range(steps):
+        st.run(moves // steps, temperature)
+        assert identify(st.pos) == start, "knot type changed"
+    assert st.energy == pytest.approx(st.recomputed_energy(), rel=1e-9)
+    assert np.max(np.abs(bonds(st.pos) - 1)) < 1e-10
+    return st
+
+
+@pytest.mark.parametrize("temperature", [0.5, 1e-3])
+def test_topology_preserved_fast(temperature):
+    params = MoveParams(p_single=0.3, m_max=60, l_cap=1.0, phi_max=1.5)
+    _fuzz("5_2", temperature, 1_000_000, params, seed=1)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("exclusion", ["bead", "tube"])
+@pytest.mark.parametrize("temperature", [1.0, 1e-3])
+def test_topology_fuzz_1e7(exclusion, temperature):
+    params = MoveParams(p_single=0.5, m_max=60, l_cap=1.0, phi_max=1.5, exclusion=exclusion)
+    _fuzz("5_2", temperature, 10_000_000, params, seed=2)
+
+
+def test_driver_verifies_and_records():
+    res = run_replica(chain("3_1"), AnnealSettings(moves=400_000, n_chunks=20), seed=5)
+    assert res.energy == pytest.approx(res.energy_recomputed)
+    assert res.max_bond_error < 1e-10
+    assert res.exclusion_margin >= 0
+    assert len(res.trace_epsilon) == 30
+    assert res.epsilon >= 2 * math.pi**2 * 4 * 0.99  # lower bound 2π²n², n = 2 (discrete)
