@@ -72,7 +72,8 @@ def seg_dist2(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
 @njit(cache=True)
 def _segment_distance(p0, p1, q0, q1):
     return np.sqrt(
-        seg_dist2(p0[0], p0[1], p0[2], p1[0], p1[1], p1[2], q0[0], q0[1], q0[2], q1[0], q1[1], q1[2])
+        seg_dist2(p0[0], p0[1], p0[2], p1[0], p1[1], p1[2],
+                  q0[0], q0[1], q0[2], q1[0], q1[1], q1[2])
     )
 
 

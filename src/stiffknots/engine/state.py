@@ -47,7 +47,8 @@ class MoveParams:
     def validate(self, n_beads: int) -> None:
         if self.exclusion not in EXCLUSION_MODELS:
             raise ValueError(
-                f"unknown exclusion model {self.exclusion!r}; allowed: {', '.join(EXCLUSION_MODELS)}"
+                f"unknown exclusion model {self.exclusion!r}; "
+                f"allowed: {', '.join(EXCLUSION_MODELS)}"
             )
         if not 0 < self.delta < 0.5:
             raise ValueError(f"delta must be in (0, 0.5) rad, got {self.delta}")

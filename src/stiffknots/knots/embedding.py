@@ -44,8 +44,8 @@ that works (see :func:`minimal_beads`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 from numba import njit

@@ -50,6 +50,7 @@ import contextlib
 import io
 import re
 import threading
+
 import numpy as np
 
 __all__ = [
