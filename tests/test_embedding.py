@@ -28,6 +28,8 @@ def _check_chain(x, n, d_min=D_MIN):
     keep = (j - i) % n >= 2
     keep &= (i - j) % n >= 2
     d = np.linalg.norm(x[i[keep]] - x[j[keep]], axis=1)
+    if d.size == 0:  # a triangle has no pair of non-bonded beads
+        return np.inf
     assert d.min() >= d_min
     return d.min()
 
