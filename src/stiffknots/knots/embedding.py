@@ -80,9 +80,14 @@ class EmbeddingError(ValueError):
 
 
 def parse_braid(word) -> list[int]:
-    """Braid word as a list of nonzero ints; accepts a sequence or a KnotInfo string '[1,-2,1]'."""
+    """Braid word as a list of nonzero ints; accepts a sequence or a KnotInfo string '[1,-2,1]'
+    (of a KnotInfo list of several words '[[1,...],[...]]', the first is taken)."""
     if isinstance(word, str):
-        s = word.strip().strip("[]{}()").strip()
+        s = word.strip()
+        if s.startswith("[[") or s.startswith("{{"):
+            # KnotInfo lists several words for a few knots: '[[...],[...]]'; take the first
+            s = s[1:].split("]")[0].split("}")[0]
+        s = s.strip().strip("[]{}()").strip()
         if not s:
             return []
         try:

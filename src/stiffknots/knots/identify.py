@@ -5,13 +5,18 @@ How it works
 1. The polygon is handed to :func:`topoly.homfly` as a closed chain (``Closure.CLOSED``: topoly
    joins the last point to the first with a straight segment, exactly the closing bond of our
    closed chains; the first point must not be repeated at the end, though a repeat is harmless).
+   The polygon is first turned by a fixed generic rotation, because topoly projects along z and
+   crashes (segmentation fault, which no ``try`` can catch) on degenerate projections such as
+   the stacked strands of our braid embeddings seen from above.
    topoly first simplifies the chain with the KMT triangle-elimination algorithm
    (``ReduceMethod.KMT``: deterministic, removes a bead when the triangle it makes with its
-   neighbours is pierced by no other bond, which preserves the knot type), projects it and
-   computes the HOMFLY-PT polynomial of the diagram.  If the reduced diagram still has too many
-   crossings ("TMC"), a second pass uses Reidemeister-move simplification with a higher crossing
-   limit.  No random closure is involved, and run_parallel/cuda are off: the answer is
-   deterministic.
+   neighbours is pierced by no other bond, which preserves the knot type), projects it along z
+   and computes the HOMFLY-PT polynomial of the diagram.  If the reduced diagram is too large
+   for topoly's limit (``max_cross=60``, which in practice allows ~30 crossings), the reduced
+   chain is viewed along 24 more fixed directions and the projection with the fewest crossings
+   is used, with KMT and then topoly's fast Reidemeister I/II simplification ("EASY"); the full
+   Reidemeister simplification was found far too slow on such diagrams.  No random closure is involved, and
+   run_parallel/cuda are off: the answer is deterministic.
 2. The polynomial (chiral: mirror images have mirrored polynomials) is looked up in topoly's
    bundled HOMFLY-PT table (all prime knots through 12 crossings plus many composite knots and
    links), without topoly's ``minimal`` filter, which silently drops the more complicated
@@ -30,7 +35,7 @@ separate:
 
     5_1 | 10_132,  8_8 | 10_129,  8_16 | 10_156,  10_25 | 10_56,  10_40 | 10_103
 
-and through 12 crossings a few more coincidences with 11- and 12-crossing knots (e.g.
+plus 9_12 | 4_1#5_2 (a composite knot), and through 12 crossings a few more coincidences with 11- and 12-crossing knots (e.g.
 6_2 | 12n_25, 7_1 | 12n_749).  :func:`identify` reports such cases honestly as all candidates
 joined by ``'|'``, sorted by crossing number (e.g. ``'5_1|10_132'``); ``max_crossings=10`` keeps
 only the candidates through 10 crossings.  A polynomial not in the table gives ``'unknown'``
@@ -63,8 +68,7 @@ __all__ = [
     "crossing_number_of_name",
 ]
 
-_DEFAULT_MAX_CROSS = 40
-_RETRY_MAX_CROSS = 80
+_MAX_CROSS = 60  # topoly's limit (it counts each crossing about twice); HOMFLY-PT cost grows exponentially with the crossings of the reduced diagram
 _LOCK = threading.Lock()
 
 
@@ -218,9 +222,17 @@ def close_open_chain_along_z(coords, far: float | None = None) -> np.ndarray:
     return np.vstack([x, np.asarray(tail)])
 
 
-def homfly_code(coords, closed: bool = True) -> str:
+def homfly_code(
+    coords, closed: bool = True, *, max_cross: int = _MAX_CROSS, n_directions: int = 24
+) -> str:
     """topoly's code of the HOMFLY-PT polynomial of the polygon (chiral), e.g. for 4_1
-    '[-1 0 [-1] 0 -1]|[0]|[1]'.  Raises :class:`IdentificationError` if it cannot be computed."""
+    '[-1 0 [-1] 0 -1]|[0]|[1]'.
+
+    topoly projects along z after KMT reduction; if that diagram has more than ``max_cross``
+    crossings, the KMT-reduced chain is viewed along ``n_directions`` further (fixed,
+    pseudo-random) directions and the one with the fewest crossings is used.  Raises
+    :class:`IdentificationError` if no diagram small enough is found.
+    """
     topoly, Closure, ReduceMethod, _ = _topoly()
     x = np.asarray(coords, dtype=np.float64)
     if not closed:
@@ -233,34 +245,92 @@ def homfly_code(coords, closed: bool = True) -> str:
         raise ValueError("coordinates contain NaN or infinity")
     if len(x) > 3 and np.allclose(x[0], x[-1], atol=0.0, rtol=0.0):
         x = x[:-1]
-    chain = x.tolist()
-    attempts = [
-        (ReduceMethod.KMT, _DEFAULT_MAX_CROSS),
-        (ReduceMethod.REIDEMEISTER, _RETRY_MAX_CROSS),
-    ]
-    code = None
-    for method, max_cross in attempts:
-        try:
-            with _quiet():
-                code = topoly.homfly(
-                    chain,
-                    closure=Closure.CLOSED,
-                    reduce_method=method,
-                    max_cross=max_cross,
-                    translate=False,
-                    poly_reduce=True,
-                    run_parallel=False,
-                    cuda=False,
-                )
-        except Exception as exc:  # topoly raises assorted exceptions
-            raise IdentificationError(f"topoly could not compute the HOMFLY-PT polynomial: {exc}") from exc
-        code = str(code).strip()
-        if "TMC" not in code and "Err" not in code:
+    # A fixed generic rotation first: topoly projects along z and crashes (segmentation fault)
+    # on degenerate projections, e.g. strands stacked exactly above each other as in our braid
+    # embeddings, or a planar polygon seen edge-on.
+    x = x @ _GENERIC_ROTATION.T
+    code = _homfly_once(topoly, Closure, ReduceMethod, x, max_cross)
+    if code is not None:
+        return code
+    # Too many crossings in the z projection even after KMT: reduce once, then look for the
+    # projection direction with the fewest crossings among a fixed set of rotations.
+    with _quiet():
+        red = topoly.reduce_structure(x.tolist(), reduce_method=ReduceMethod.KMT, output_type="xyz")
+    try:
+        y = np.array([[float(v) for v in line.split()] for line in str(red).strip().splitlines()])
+        if y.ndim != 2 or y.shape[1] != 3 or len(y) < 3:
+            raise ValueError
+    except ValueError:
+        y = x
+    rng = np.random.default_rng(12345)
+    best, best_rot = _projected_crossings(y), np.eye(3)
+    for _ in range(n_directions):
+        rot = _rotation(rng)
+        c = _projected_crossings(y @ rot.T)
+        if c < best:
+            best, best_rot = c, rot
+    for method in (ReduceMethod.KMT, ReduceMethod.EASY):
+        code = _homfly_once(topoly, Closure, ReduceMethod, y @ best_rot.T, max_cross, method)
+        if code is not None:
             return code
     raise IdentificationError(
-        f"HOMFLY-PT polynomial not computed: the reduced diagram has more than {_RETRY_MAX_CROSS} "
-        f"crossings (topoly answered {code!r})"
+        f"HOMFLY-PT polynomial not computed: the chain is too entangled, its best projection "
+        f"(of {n_directions + 1} tried) still has {best} crossings after KMT reduction "
+        f"(limit max_cross={max_cross})"
     )
+
+
+def _homfly_once(topoly, Closure, ReduceMethod, x, max_cross, method=None):
+    method = ReduceMethod.KMT if method is None else method
+    try:
+        with _quiet():
+            code = topoly.homfly(
+                np.asarray(x).tolist(),
+                closure=Closure.CLOSED,
+                reduce_method=method,
+                max_cross=max_cross,
+                translate=False,
+                poly_reduce=True,
+                run_parallel=False,
+                cuda=False,
+            )
+    except Exception as exc:  # topoly raises assorted exceptions
+        raise IdentificationError(f"topoly could not compute the HOMFLY-PT polynomial: {exc}") from exc
+    code = str(code).strip()
+    if "TMC" in code or "Err" in code:
+        return None
+    return code
+
+
+def _rotation(rng: np.random.Generator) -> np.ndarray:
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    if np.linalg.det(q) < 0:
+        q[:, 0] = -q[:, 0]
+    return q
+
+
+_GENERIC_ROTATION = _rotation(np.random.default_rng(20070101))
+
+
+def _projected_crossings(x: np.ndarray) -> int:
+    """Number of crossings of the closed polygon projected on the xy plane."""
+    p = np.asarray(x)[:, :2]
+    q = np.roll(p, -1, axis=0)
+    n = len(p)
+
+    def orient(a, b, c):
+        return (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (
+            c[..., 0] - a[..., 0]
+        )
+
+    count = 0
+    for i in range(n - 2):
+        j = np.arange(i + 2, n if i > 0 else n - 1)
+        a, b, c, d = p[i], q[i], p[j], q[j]
+        hit = (orient(a, b, c) * orient(a, b, d) < 0) & (orient(c, d, a) * orient(c, d, b) < 0)
+        count += int(np.count_nonzero(hit))
+    return count
 
 
 def identify(coords, closed: bool = True, *, max_crossings: int | None = None) -> str:
@@ -276,7 +346,8 @@ def identify(coords, closed: bool = True, *, max_crossings: int | None = None) -
     max_crossings : int, optional
         Keep only candidates with at most this many crossings (if some remain).  With 10,
         the 11- and 12-crossing knots that share a HOMFLY-PT polynomial with a smaller knot are
-        dropped (e.g. '6_2|12n_25' -> '6_2'); the five 10-crossing pairs remain ambiguous.
+        dropped (e.g. '6_2|12n_25' -> '6_2'); the five 10-crossing pairs and
+        9_12|4_1#5_2 remain ambiguous.
 
     Returns
     -------

@@ -1,0 +1,136 @@
+"""Knot identification (stiffknots.knots.identify) and its agreement with the embeddings."""
+
+import numpy as np
+import pytest
+
+from stiffknots.knots.embedding import (
+    D_MIN,
+    embed_braid,
+    embedding_report,
+    minimal_beads,
+    parse_braid,
+    regular_polygon,
+)
+from stiffknots.knots.identify import (
+    close_open_chain_along_z,
+    crossing_number_of_name,
+    identify,
+    normalize_name,
+    verify_knot,
+)
+
+
+def _knotinfo(max_crossings, min_crossings=0):
+    import database_knotinfo
+
+    out = []
+    for k in database_knotinfo.link_list()[1:]:  # row 0 is the header
+        c = int(k["crossing_number"])
+        if c > max_crossings:
+            break
+        if c >= min_crossings:
+            out.append((k["name"], parse_braid(k["braid_notation"])))
+    return out
+
+
+def _torus(p, q, n=150):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    r = 2 + np.cos(q * t)
+    return np.column_stack([r * np.cos(p * t), r * np.sin(p * t), -np.sin(q * t)])
+
+
+def test_normalize_name():
+    assert normalize_name("4.1") == "4_1"
+    assert normalize_name("+4_1") == normalize_name("-4_1") == "4_1"
+    assert normalize_name("K3_1") == "3_1"
+    assert normalize_name("12n25") == normalize_name("12n_25") == "12n_25"
+    assert normalize_name("unknot") == "0_1"
+    assert normalize_name("+10_132|-5_1") == "5_1|10_132"
+    # composite: relative chirality survives a global mirror
+    assert normalize_name("+3_1#+3_1") == normalize_name("-3_1#-3_1") == "3_1#3_1"
+    assert normalize_name("+3_1#-3_1") == normalize_name("-3_1#+3_1") == "3_1#-3_1"
+    assert crossing_number_of_name("5_2#4_1") == 9
+
+
+def test_unknot_and_torus_knots():
+    assert identify(regular_polygon(150)) == "0_1"
+    assert identify(regular_polygon(40)[:, [0, 2, 1]]) == "0_1"  # planar, seen edge-on
+    assert identify(_torus(2, 3)) == "3_1"
+    assert identify(_torus(2, 5)) == "5_1|10_132"  # HOMFLY-PT cannot separate these
+    assert identify(_torus(2, 5), max_crossings=9) == "5_1"
+    assert verify_knot(_torus(2, 5), "5.1") == (True, "5_1|10_132")
+    assert identify(_torus(3, 4)) == "8_19"
+    # repeated first point tolerated
+    x = _torus(2, 3)
+    assert identify(np.vstack([x, x[:1]])) == "3_1"
+
+
+def test_mirror_insensitive():
+    for w in ([1, 1, 1], [1, 1, 1, 2, -1, 2]):
+        x = embed_braid(w, n_beads=150)
+        xm = embed_braid([-g for g in w], n_beads=150)
+        assert identify(x) == identify(xm)
+        assert identify(x * np.array([1, 1, -1])) == identify(x)
+
+
+def test_verify_knot_mismatch():
+    x = embed_braid([1, -2, 1, -2], n_beads=150)
+    assert verify_knot(x, "4_1") == (True, "4_1")
+    assert verify_knot(x, "3_1") == (False, "4_1")
+
+
+def test_open_chain_closure_along_z():
+    # a straight open chain is unknotted
+    line = np.column_stack([np.zeros(10), np.zeros(10), np.arange(10.0)])
+    assert identify(line, closed=False) == "0_1"
+    # open 5_2: the closed chain cut at its lowest bond; the end is led down, out sideways and
+    # up far outside, so that the start is at the bottom and the end at the top (as for the
+    # straight tails of the paper's open knots); closing along z gives back the knot
+    for word, name in (([1, 1, 1, 2, -1, 2], "5_2"), ([1, -2, 1, -2], "4_1")):
+        x = embed_braid(word, n_beads=150, seed=5)
+        b = int(np.argmin(x[:, 2]))
+        x = np.roll(x, -b, axis=0)  # bead 0 lowest, bead N-1 its neighbour
+        lo, hi = x.min(axis=0), x.max(axis=0)
+        end = x[-1]
+        tail = np.array(
+            [
+                [end[0], end[1], lo[2] - 2.0],
+                [hi[0] + 5.0, end[1], lo[2] - 2.0],
+                [hi[0] + 5.0, end[1], hi[2] + 3.0],
+            ]
+        )
+        openchain = np.vstack([x, tail])
+        closed = close_open_chain_along_z(openchain)
+        assert closed.shape == (len(openchain) + 4, 3)
+        assert verify_knot(openchain, name, closed=False)[0]
+
+
+def _check_knot(name, word, n_beads=150):
+    x = embed_braid(word, n_beads=n_beads)
+    rep = embedding_report(x)
+    assert rep.max_bond_error < 1e-10, name
+    assert rep.min_bead_distance >= D_MIN, name
+    ok, found = verify_knot(x, name)
+    assert ok, (name, found)
+    okm, foundm = verify_knot(embed_braid([-g for g in word], n_beads=n_beads), name)
+    assert okm and foundm == found, (name, found, foundm)
+
+
+@pytest.mark.parametrize("name,word", _knotinfo(8), ids=lambda v: v if isinstance(v, str) else "")
+def test_knotinfo_through_8_crossings(name, word):
+    _check_knot(name, word)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,word", _knotinfo(10, 9), ids=lambda v: v if isinstance(v, str) else "")
+def test_knotinfo_9_and_10_crossings(name, word):
+    _check_knot(name, word)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,word", _knotinfo(10, 3), ids=lambda v: v if isinstance(v, str) else "")
+def test_minimal_embedding_keeps_knot_type(name, word):
+    n = minimal_beads(word)
+    assert n <= 150
+    ok, found = verify_knot(embed_braid(word, n_beads=n), name)
+    assert ok, (name, n, found)
