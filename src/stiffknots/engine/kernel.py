@@ -537,18 +537,7 @@ def check_state(pos, mode, d, w):
                 if v > worst:
                     worst = v
     else:
-        for a in range(n):
-            a1 = a + 1 if a < n - 1 else 0
-            for b in range(a + 2, n):
-                if a == 0 and b == n - 1:
-                    continue
-                b1 = b + 1 if b < n - 1 else 0
-                dd = seg_dist2(pos[a, 0], pos[a, 1], pos[a, 2], pos[a1, 0], pos[a1, 1],
-                               pos[a1, 2], pos[b, 0], pos[b, 1], pos[b, 2], pos[b1, 0],
-                               pos[b1, 1], pos[b1, 2])
-                v = w - math.sqrt(dd)
-                if v > worst:
-                    worst = v
+        worst = w - min_nonadjacent_segment_distance(pos)
     return worst
 
 
