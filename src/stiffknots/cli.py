@@ -311,6 +311,10 @@ def version() -> None:
     out.print(__version__)
 
 
+# commands of the open-knot and restricted-curvature problems (§VIII, §IX.D)
+from stiffknots import cli_open  # noqa: E402,F401
+
+
 def main() -> None:
     """Entry point: user mistakes → one line on stderr and exit code 2, never a traceback."""
     from stiffknots.knots.catalogue import UnknownKnotError

@@ -38,6 +38,7 @@ class AnnealSettings:
     quench_fraction: float = 0.1
     n_chunks: int = 200
     target_epsilon: float | None = None
+    closed: bool = True  # False: an open chain clamped on the z axis (paper §VIII)
 
     def validate(self) -> None:
         if self.moves < 1000:
@@ -55,6 +56,7 @@ class AnnealSettings:
             "params": self.params.as_dict(),
             "quench_fraction": self.quench_fraction,
             "n_chunks": self.n_chunks,
+            "closed": self.closed,
         }
 
 
@@ -98,7 +100,7 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int,
     a disagreement above 1e-9 (relative) raises :class:`EnergyBookkeepingError`.
     """
     settings.validate()
-    state = ChainState(coords, settings.params, seed=seed)
+    state = ChainState(coords, settings.params, seed=seed, closed=settings.closed)
     n_quench = int(settings.moves * settings.quench_fraction)
     n_anneal = settings.moves - n_quench
     nch = settings.n_chunks
@@ -140,11 +142,15 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int,
             f"incremental energy {state.energy!r} differs from recomputed {e_rec!r}"
         )
     pos = state.pos
-    bonds = np.linalg.norm(np.roll(pos, -1, axis=0) - pos, axis=1)
+    if settings.closed:
+        bonds = np.linalg.norm(np.roll(pos, -1, axis=0) - pos, axis=1)
+    else:
+        bonds = np.linalg.norm(np.diff(pos, axis=0), axis=1)
     return ReplicaResult(
         replica=replica,
         seed=seed,
-        epsilon=e_rec * state.n_beads,
+        # ε = E·N/C (closed, §VII) or ε_e = E·L_e/C (open, §VIII)
+        epsilon=e_rec * (state.n_beads if settings.closed else state.excess_length),
         energy=e_rec,
         energy_recomputed=e_rec,
         coords=pos.copy(),
@@ -156,7 +162,7 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int,
         wall_time=wall,
         max_bond_error=float(np.max(np.abs(bonds - 1.0))),
         exclusion_margin=-state.violation(),
-        min_segment_distance=float(min_nonadjacent_segment_distance(pos)),
+        min_segment_distance=float(min_nonadjacent_segment_distance(pos, not settings.closed)),
         seconds_to_target=t_hit,
     )
 

@@ -44,6 +44,32 @@ bead, so scanning the cells around each moved bead finds every candidate; the be
 checked from the same scan (a bead within d of a point has the midpoint of the segment it
 starts within d + 1/2). The cost per move is independent of N.
 
+Open chains
+-----------
+With ``I_OPEN = 1`` the chain is open: beads 0, 1 and N−2, N−1 are clamped on the z axis (the
+two end segments point along −z and +z; they never move), and pivots are chosen so that the
+moved beads lie in 2 … N−3. Bond lengths and the end-to-end distance Δz are therefore fixed,
+and so is the excess length L_e = (N−1) − Δz (paper §VIII): this is the fixed-extension
+ensemble; the force term −F·Δz is a constant and drops out of every ΔE. The knot type of an
+open chain is that of the closure along the two rays that continue the end segments to ±∞.
+Those rays must not be crossed either: every free bead lives in the open slab
+z_0 < z < z_{N−1}, and a move is accepted only if, for every moved bead,
+(z_old − z_0) + (z_new − z_0) > L and (z_{N−1} − z_old) + (z_{N−1} − z_new) > L, with L the
+largest displacement of the move. By the Lipschitz argument above each moved point stays at
+height > z_0 and < z_{N−1} along the whole path, and z is linear along a segment, so no
+segment touches a ray.
+
+Energy modes and the curvature limit
+------------------------------------
+The energy per joint is f(c), c = u_n·u_{n+1} = cos θ_n: f = 1 − c (mode 0, the paper's
+E_d), or f = ((1 − c)/s)^p (mode 1, whose sum is dominated by the largest turning angles as p
+grows: used by the restricted-curvature search of §IX.D; the scale s keeps the energies of
+order one so that temperatures stay meaningful). Independently, a joint may be forbidden to turn
+by more than θ_max (``F_CMIN`` = cos θ_max): a move is rejected if it leaves a pivot's c
+below ``F_CMIN`` *and* lower than before (so a chain that starts above the limit can only
+approach it). A bend of θ between unit bonds is a circle of radius 1/(2 sin(θ/2)) through
+the three beads, so θ_max ↔ R_min = 1/(2 sin(θ_max/2)).
+
 All functions here see arrays and numbers only (no Python objects) and allocate nothing in the
 loop.
 """
@@ -60,7 +86,10 @@ from stiffknots.geometry import seg_dist2
 # integer parameter slots (``ipar``)
 I_MODE = 0  # 0 = bead, 1 = tube
 I_MMAX = 1  # largest number of beads moved by one crankshaft move (≥ 1)
-I_NIPAR = 2
+I_OPEN = 2  # 0 = closed chain, 1 = open chain with both end segments clamped on the z axis
+I_EMODE = 3  # energy per joint: 0 = bending 1 − cos θ (the paper), 1 = (1 − cos θ)^p
+I_POWER = 4  # the exponent p of energy mode 1
+I_NIPAR = 5
 
 # float parameter slots (``fpar``)
 F_DELTA = 0  # angle of the single-bead move (paper: π/100)
@@ -71,7 +100,11 @@ F_D = 4  # bead exclusion distance
 F_W = 5  # tube diameter
 F_CELL = 6  # cell side
 F_LMIN = 7  # smallest displacement scale of a multi-bead move
-F_NFPAR = 8
+F_CMIN = 8  # cos of the largest turning angle allowed at a joint (≤ −1: no limit)
+F_ZLO = 9  # open chains: z of the first bead (bottom of the slab the free beads live in)
+F_ZHI = 10  # open chains: z of the last bead (top of the slab)
+F_EINV = 11  # energy mode 1: (1 − cos θ) is divided by this scale before the power
+F_NFPAR = 12
 
 # counters (``cnt``), per move class: 0 = single bead, 1 = multi-bead
 C_TRIED = 0
@@ -86,14 +119,23 @@ def _hash(ix, iy, iz, mask):
 
 
 @njit(cache=True)
-def cell_build(pos, cell, head, nxt, prv, bucket):
-    """(Re)build the spatial hash of segment midpoints. ``head`` has a power-of-two size."""
+def cell_build(pos, cell, head, nxt, prv, bucket, is_open=False):
+    """(Re)build the spatial hash of segment midpoints. ``head`` has a power-of-two size.
+
+    Segment v joins beads v and v+1; an open chain has no segment N−1 (its ``bucket`` is −1).
+    """
     n = pos.shape[0]
     mask = head.shape[0] - 1
     inv = 1.0 / cell
     for h in range(head.shape[0]):
         head[h] = -1
-    for v in range(n):
+    nseg = n
+    if is_open:
+        nseg = n - 1
+        bucket[n - 1] = -1
+        nxt[n - 1] = -1
+        prv[n - 1] = -1
+    for v in range(nseg):
         w = v + 1
         if w == n:
             w = 0
@@ -137,12 +179,28 @@ def _cell_update(v, h, head, nxt, prv, bucket):
     head[h] = v
 
 
+@njit(cache=True, inline="always")
+def _joint_energy(c, emode, power, escale):
+    """Energy of one joint with c = u_n·u_{n+1}: 1 − c (paper §VII) or ((1 − c)/s)^p."""
+    if emode == 0:
+        return 1.0 - c
+    x = (1.0 - c) / escale
+    if x < 0.0:
+        x = 0.0
+    return x ** power
+
+
 @njit(cache=True)
-def energy_closed(pos):
-    """E_d = Σ_n (1 − u_n·u_{n+1}) for a closed unit-bond chain (paper §VII), C = 1."""
+def energy_chain(pos, is_open=False, emode=0, power=1, escale=1.0):
+    """Σ_joints f(u_n·u_{n+1}) for a unit-bond chain (f: see the module docstring), C = 1.
+
+    Closed chains have N joints, open chains the N − 2 interior ones (beads 1 … N−2).
+    """
     n = pos.shape[0]
     e = 0.0
-    for v in range(n):
+    lo = 1 if is_open else 0
+    hi = n - 1 if is_open else n
+    for v in range(lo, hi):
         a = v - 1 if v > 0 else n - 1
         b = v + 1 if v < n - 1 else 0
         ux = pos[v, 0] - pos[a, 0]
@@ -151,8 +209,30 @@ def energy_closed(pos):
         wx = pos[b, 0] - pos[v, 0]
         wy = pos[b, 1] - pos[v, 1]
         wz = pos[b, 2] - pos[v, 2]
-        e += 1.0 - (ux * wx + uy * wy + uz * wz)
+        e += _joint_energy(ux * wx + uy * wy + uz * wz, emode, power, escale)
     return e
+
+
+@njit(cache=True)
+def energy_closed(pos):
+    """E_d = Σ_n (1 − u_n·u_{n+1}) for a closed unit-bond chain (paper §VII), C = 1."""
+    return energy_chain(pos, False, 0, 1)
+
+
+@njit(cache=True)
+def turning_cosines(pos, is_open=False):
+    """c_n = u_n·u_{n+1} at every joint (N for closed chains, N − 2 for open ones)."""
+    n = pos.shape[0]
+    lo = 1 if is_open else 0
+    hi = n - 1 if is_open else n
+    out = np.empty(hi - lo)
+    for v in range(lo, hi):
+        a = v - 1 if v > 0 else n - 1
+        b = v + 1 if v < n - 1 else 0
+        out[v - lo] = ((pos[v, 0] - pos[a, 0]) * (pos[b, 0] - pos[v, 0])
+                       + (pos[v, 1] - pos[a, 1]) * (pos[b, 1] - pos[v, 1])
+                       + (pos[v, 2] - pos[a, 2]) * (pos[b, 2] - pos[v, 2]))
+    return out
 
 
 _M64 = 0xFFFFFFFFFFFFFFFF
@@ -226,8 +306,16 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
     n = pos.shape[0]
     mode = ipar[I_MODE]
     m_max = ipar[I_MMAX]
-    if m_max > n - 3:
-        m_max = n - 3
+    is_open = ipar[I_OPEN] != 0
+    emode = ipar[I_EMODE]
+    power = ipar[I_POWER]
+    cmin = fpar[F_CMIN]
+    zlo = fpar[F_ZLO]
+    zhi = fpar[F_ZHI]
+    escale = fpar[F_EINV]
+    mcap = n - 4 if is_open else n - 3
+    if m_max > mcap:
+        m_max = mcap
     delta = fpar[F_DELTA]
     p_single = fpar[F_PSINGLE]
     phi_max = fpar[F_PHIMAX]
@@ -260,9 +348,18 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             cls = 1
         cnt[C_TRIED + cls] += 1
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        j = int(u * n)
-        if j >= n:
-            j = n - 1
+        if is_open:
+            # pivots 1 ≤ j and k ≤ N−2: the clamped end segments never move
+            span = n - 3 - m
+            if span < 1:
+                continue
+            j = 1 + int(u * span)
+            if j > span:
+                j = span
+        else:
+            j = int(u * n)
+            if j >= n:
+                j = n - 1
         k = j + m + 1
         if k >= n:
             k -= n
@@ -350,7 +447,17 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             + (ky - newpos[m - 1, 1]) * by
             + (kz - newpos[m - 1, 2]) * bz
         )
-        de = (old1 - new1) + (old2 - new2)
+        if cmin > -1.0:
+            # curvature limit: no pivot may end beyond θ_max unless it bends less than before
+            if (new1 < cmin and new1 < old1) or (new2 < cmin and new2 < old2):
+                continue
+        if emode == 0:
+            de = (old1 - new1) + (old2 - new2)
+        else:
+            de = (_joint_energy(new1, emode, power, escale)
+                  - _joint_energy(old1, emode, power, escale)
+                  + _joint_energy(new2, emode, power, escale)
+                  - _joint_energy(old2, emode, power, escale))
         if de > 0.0:
             if beta == 0.0:
                 continue
@@ -369,6 +476,15 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             reach = fpar[F_D] + 0.5
         lim_mid2 = (1.0 + dseg) * (1.0 + dseg)
         ok = True
+        if is_open:
+            # the closure rays beyond the clamped ends: moved beads stay inside the slab
+            for q in range(m):
+                b = j + 1 + q
+                zo = pos[b, 2]
+                zn = newpos[q, 2]
+                if (zo - zlo) + (zn - zlo) <= lmove or (zhi - zo) + (zhi - zn) <= lmove:
+                    ok = False
+                    break
         for q in range(m):
             if not ok:
                 break
@@ -440,7 +556,7 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
                                 sep = v - b
                                 if sep < 0:
                                     sep = -sep
-                                if n - sep < sep:
+                                if not is_open and n - sep < sep:
                                     sep = n - sep
                                 if sep >= 2:
                                     ddx = vx - px
@@ -517,18 +633,18 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
 
 
 @njit(cache=True)
-def check_state(pos, mode, d, w):
+def check_state(pos, mode, d, w, is_open=False):
     """Brute-force O(N²) check of the exclusion rule; returns the worst violation (≤ 0 is ok).
 
-    bead mode: max over pairs at cyclic distance ≥ 2 of (d − distance);
-    tube mode: max over segment pairs sharing no bead of (w − distance).
+    bead mode: max over pairs at (cyclic, for closed chains) index distance ≥ 2 of
+    (d − distance); tube mode: max over segment pairs sharing no bead of (w − distance).
     """
     n = pos.shape[0]
     worst = -np.inf
     if mode == 0:
         for a in range(n):
             for b in range(a + 2, n):
-                if a == 0 and b == n - 1:
+                if a == 0 and b == n - 1 and not is_open:
                     continue
                 dx = pos[a, 0] - pos[b, 0]
                 dy = pos[a, 1] - pos[b, 1]
@@ -537,18 +653,20 @@ def check_state(pos, mode, d, w):
                 if v > worst:
                     worst = v
     else:
-        worst = w - min_nonadjacent_segment_distance(pos)
+        worst = w - min_nonadjacent_segment_distance(pos, is_open)
     return worst
 
 
 @njit(cache=True)
-def min_nonadjacent_segment_distance(pos):
-    """Minimum distance between segments of a closed chain that share no bead (O(N²))."""
+def min_nonadjacent_segment_distance(pos, is_open=False):
+    """Minimum distance between segments that share no bead (O(N²)); an open chain has no
+    closing segment N−1 → 0."""
     n = pos.shape[0]
     best = np.inf
-    for a in range(n):
+    nseg = n - 1 if is_open else n
+    for a in range(nseg):
         a1 = a + 1 if a < n - 1 else 0
-        for b in range(a + 2, n):
+        for b in range(a + 2, nseg):
             if a == 0 and b == n - 1:
                 continue
             b1 = b + 1 if b < n - 1 else 0

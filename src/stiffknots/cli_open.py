@@ -1,0 +1,216 @@
+"""CLI commands for open knots under tension (§VIII) and the restricted-curvature problem
+(§IX.D). Registered on :data:`stiffknots.cli.app`; they only compose the library."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from stiffknots.cli import JsonOpt, UserError, _dump, _fmt, app, err, out
+
+
+def _floats(text: str, what: str) -> list[float]:
+    try:
+        vals = [float(v) for v in text.replace(";", ",").split(",") if v.strip()]
+    except ValueError:
+        raise UserError(f"{what} must be numbers separated by commas, got {text!r}") from None
+    if not vals:
+        raise UserError(f"{what}: give at least one value")
+    return vals
+
+
+@app.command("open")
+def open_knot(
+    name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_1, 5_2 ...")],
+    excess_length: Annotated[str, typer.Option(
+        "--excess-length", help="Excess length(s) L_e in bond lengths, e.g. 40,60,80.")] = "80",
+    force: Annotated[str | None, typer.Option(
+        help="Tension(s) F in C/b²: each is turned into the excess length it selects, "
+             "L_e = (ε_e C/F)^½, using ε_e measured at the first --excess-length.")] = None,
+    moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
+    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
+    seed: Annotated[int, typer.Option(help="Seed.")] = 0,
+    exclusion: Annotated[str, typer.Option(help="bead (paper) or tube.")] = "bead",
+    w: Annotated[float | None, typer.Option(help="Tube diameter (tube model).")] = None,
+    m_max: Annotated[int, typer.Option(help="Largest sub-chain of a crankshaft move.")] = 60,
+    out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
+    json_: JsonOpt = False,
+) -> None:
+    """Anneal an open knot with its ends clamped on the z axis (paper §VIII); measure μ, ε_e.
+
+    The ensemble is fixed extension: L_e is fixed, the tension is measured as μ = E/L_e and,
+    over several L_e, as −dE/dL_e. --json prints knot, tension, excess_length, eps_e, shape
+    of the last point, and every point.
+    """
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from stiffknots.engine.state import MoveParams
+    from stiffknots.open_knots import anneal_open, excess_length_for_force
+
+    les = _floats(excess_length, "--excess-length")
+    if any(v != int(v) or v < 8 for v in les):
+        raise UserError(f"--excess-length must be integers ≥ 8 (bond lengths), got {les}")
+    forces = _floats(force, "--force") if force else []
+    if any(f <= 0 for f in forces):
+        raise UserError(f"--force must be > 0 (units C/b²), got {forces}")
+    if replicas < 1 or moves < 1000:
+        raise UserError("--replicas must be ≥ 1 and --moves ≥ 1000")
+    kw = {"exclusion": exclusion, "m_max": m_max}
+    if w is not None:
+        kw["w"] = w
+    params = MoveParams(**kw)
+    results = []
+    plan = [int(v) for v in les]
+    with Progress(TextColumn("[bold]open {task.fields[knot]} L_e = {task.fields[le]}"),
+                  BarColumn(), TextColumn("{task.completed}/{task.total} replicas"),
+                  TimeElapsedColumn(), console=err, transient=True, disable=json_) as prog:
+        task = prog.add_task("open", total=replicas, knot=name, le=plan[0])
+
+        def one(le):
+            prog.reset(task, total=replicas)
+            prog.update(task, le=le)
+            r = anneal_open(name, le, moves=moves, replicas=replicas, seed=seed, params=params,
+                            on_replica_done=lambda _r: prog.advance(task))
+            results.append(r)
+            return r
+
+        first = one(plan[0])
+        for le in plan[1:]:
+            one(le)
+        for f in forces:
+            le = max(8, int(round(excess_length_for_force(first.eps_e, f))))
+            r = one(le)
+            r.requested_force = f
+    points = []
+    for r in results:
+        d = r.to_dict()
+        p = {k: d[k] for k in ("excess_length", "energy", "eps_e", "tension", "shape",
+                               "beads", "knot_verified", "wall_time")}
+        p["requested_force"] = getattr(r, "requested_force", None)
+        p["min_segment_distance"] = r.best.min_segment_distance
+        p["shape_features"] = d["shape_features"]
+        points.append(p)
+    last = points[-1]
+    res0 = results[0]
+    summary = {
+        "knot": res0.knot, "tension": last["tension"], "excess_length": last["excess_length"],
+        "eps_e": last["eps_e"], "shape": last["shape"], "bounds": res0.bounds,
+        "points": points, "seed": seed, "moves": moves, "replicas": replicas,
+        "params": params.as_dict(), "version": res0.version,
+        "units": "bond length b = 1, C = 1: tension in C/b², eps_e = E·L_e/C",
+    }
+    if len(points) >= 2:
+        x = [1 / p["excess_length"] ** 2 for p in points]
+        y = [p["tension"] for p in points]
+        summary["fit_eps_e"] = sum(a * b for a, b in zip(x, y, strict=True)) / sum(
+            a * a for a in x)
+    if out_dir is not None:
+        summary["files"] = _open_files(out_dir, results, points, summary)
+    if json_:
+        _dump(summary)
+        return
+    from rich.table import Table
+
+    b = res0.bounds
+    t = Table(title=f"open {res0.knot}: ε_e bounds [{_fmt(b['eps_e_lower'])}, "
+                    f"{_fmt(b['eps_e_upper'])}] (§VIII)")
+    for col in ("L_e", "N", "F asked", "μ = E/L_e", "ε_e = μL_e²", "shape", "knot", "s"):
+        t.add_column(col, justify="right")
+    for p in points:
+        t.add_row(f"{p['excess_length']:.0f}", str(p["beads"]),
+                  "" if p["requested_force"] is None else f"{p['requested_force']:.3g}",
+                  f"{p['tension']:.5g}", f"{p['eps_e']:.3f}", p["shape"],
+                  "✓" if p["knot_verified"] else "✗", f"{p['wall_time']:.0f}")
+    out.print(t)
+    if "fit_eps_e" in summary:
+        out.print(f"fit μ L_e²/C = {summary['fit_eps_e']:.3f} (2π² = {2 * math.pi ** 2:.3f})")
+    if out_dir is not None:
+        out.print(f"results in {out_dir}/")
+
+
+def _open_files(out_dir: Path, results, points, summary) -> dict:
+    import json
+
+    from stiffknots.report.figures import plot_tension, save_figure
+    from stiffknots.report.render import save_chain_png
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    files = {}
+    for r in results:
+        sub = out_dir / f"Le_{int(r.excess_length)}"
+        r.save(sub)
+        png = sub / "best.png"
+        save_chain_png(r.best.coords, png, closed=False,
+                       title=f"open {r.knot}, L_e = {r.excess_length:.0f}: ε_e = {r.eps_e:.2f}")
+        files[f"Le_{int(r.excess_length)}"] = str(sub)
+    k = results[0]
+    from stiffknots.knots.catalogue import get_knot
+
+    kk = get_knot(k.knot)
+    pts = [{"knot": k.knot, "L_e": p["excess_length"], "mu": p["tension"], "n": kk.bridge_number,
+            "i": kk.braid_index} for p in points]
+    fig = save_figure(plot_tension(pts), out_dir / "tension.png")
+    files["tension_png"] = str(fig)
+    (out_dir / "summary.json").write_text(json.dumps(
+        {k2: v for k2, v in summary.items() if k2 != "files"}, indent=2, default=float))
+    files["summary"] = str(out_dir / "summary.json")
+    return files
+
+
+@app.command()
+def tightest(
+    name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
+    max_curvature: Annotated[float | None, typer.Option(
+        help="Curvature limit 1/R in 1/(your length unit): the minimal length L† is then "
+             "printed in that unit too (the search itself is scale-free: L†/R).")] = None,
+    beads: Annotated[int, typer.Option(help="Resolution N (finer → thinner limit).")] = 150,
+    moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
+    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
+    seed: Annotated[int, typer.Option(help="Seed.")] = 0,
+    exclusion: Annotated[str, typer.Option(help="bead (d = 1/√2) or tube.")] = "bead",
+    out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
+    json_: JsonOpt = False,
+) -> None:
+    """Shortest knot whose curvature never exceeds 1/R (paper §IX.D): L†/R and its bounds."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from stiffknots.tightest import radius_of_turn
+    from stiffknots.tightest import tightest as run
+
+    if max_curvature is not None and max_curvature <= 0:
+        raise UserError(f"--max-curvature must be > 0, got {max_curvature}")
+    if beads < 8 or replicas < 1:
+        raise UserError("--beads must be ≥ 8 and --replicas ≥ 1")
+    with Progress(TextColumn("[bold]tightest {task.fields[knot]}"), BarColumn(),
+                  TextColumn("{task.completed}/{task.total} replicas"), TimeElapsedColumn(),
+                  console=err, transient=True, disable=json_) as prog:
+        task = prog.add_task("tight", total=replicas, knot=name)
+        res = run(name, beads, moves=moves, replicas=replicas, seed=seed, exclusion=exclusion,
+                  on_replica_done=lambda _r: prog.advance(task))
+    d = res.to_dict()
+    d["max_curvature"] = max_curvature
+    if max_curvature is not None:
+        d["length"] = d["length_over_R"] / max_curvature
+    if out_dir is not None:
+        from stiffknots.report.render import save_chain_png
+
+        paths = res.save(out_dir)
+        png = Path(out_dir) / "best.png"
+        save_chain_png(res.best.coords, png,
+                       title=f"{res.knot}: L†/R = {res.length_over_R:.3f} (N = {beads})")
+        d["files"] = {k: str(v) for k, v in paths.items()} | {"png": str(png)}
+    if json_:
+        _dump(d)
+        return
+    b = res.bounds
+    out.print(f"{res.knot}: L†/R = {d['length_over_R']:.4f}  (bounds [{_fmt(b['lower'])}, "
+              f"{_fmt(b['upper'])}], {b['attained_by']}); θ* = {d['theta_max']:.5f} rad, "
+              f"R = {radius_of_turn(d['theta_max']):.3f} bonds; replicas "
+              + ", ".join(f"{r.length_over_R:.4f}" for r in res.replicas)
+              + f"; {res.wall_time:.0f} s")
+    if max_curvature is not None:
+        out.print(f"with 1/R = {max_curvature:g}: L† = {d['length']:.4g}")

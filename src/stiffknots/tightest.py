@@ -1,0 +1,255 @@
+"""The restricted-curvature problem (paper §IX.D): the shortest knot whose curvature ≤ 1/R.
+
+Discrete model
+--------------
+A closed chain of N unit bonds (length L = N). A turning angle θ between consecutive bonds
+is the bend of the circle of radius r = 1/(2 sin(θ/2)) through the three beads (the beads
+lie on it at unit chords), so a chain whose largest turning angle is θ* has curvature at most
+1/R with R = 1/(2 sin(θ*/2)), and its length in units of R is
+
+    L/R = 2 N sin(θ*/2).
+
+For fixed N the shortest knot in units of R is the chain with the smallest θ*, so the search
+minimises the largest turning angle of a chain of the knot type at fixed N:
+
+* energy Σ ((1 − cos θ_n)/s)^p with a large even p (default 8): as p grows this sum is
+  dominated by the largest angles, and its minimum approaches the minimax (s = 1 − cos θ_ref,
+  θ_ref = 2π n/N, keeps the numbers of order one);
+* a ratchet: after every chunk of moves the limit θ_max is lowered to the current largest
+  angle, and the kernel rejects any move that would bend a joint beyond it (unless it
+  straightens it), so θ* never grows again;
+* the exclusion (bead or tube) is kept, as a regulariser of the thin knot: it must be small
+  compared with R (d/R ≈ 4π d/N for a doubly covered circle), so refining N approaches the
+  thin limit.
+
+The bounds are 2π n R ≤ L† ≤ 2π min(7n/3, i) R (§IX.D); for n = i (the trefoil: 4π R) the
+minimum is the i-fold covered circle.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from stiffknots._version import __version__
+from stiffknots.engine.driver import (
+    TopologyChangedError,
+    default_workers,
+    replica_seeds,
+)
+from stiffknots.engine.pool import run_jobs
+from stiffknots.engine.state import ChainState, MoveParams
+
+DEFAULT_TIGHT_MOVES = 30_000_000
+
+
+def length_over_R(theta_max: float, n_beads: int) -> float:
+    """L/R = 2N sin(θ*/2) for a closed chain of N unit bonds with largest turning angle θ*."""
+    return float(2.0 * n_beads * np.sin(theta_max / 2.0))
+
+
+def radius_of_turn(theta: float) -> float:
+    """Radius 1/(2 sin(θ/2)) of the circle through three beads at unit chords turning by θ."""
+    return float(1.0 / (2.0 * np.sin(theta / 2.0)))
+
+
+@dataclass
+class TightReplica:
+    """One replica of the restricted-curvature search (plain data)."""
+
+    replica: int
+    seed: int
+    theta_max: float
+    length_over_R: float
+    coords: np.ndarray
+    trace_moves: np.ndarray
+    trace_theta: np.ndarray
+    wall_time: float
+    exclusion_margin: float
+    min_segment_distance: float
+    energy_recomputed: float
+    energy_incremental: float
+    knot: str | None = None
+    knot_verified: bool | None = None
+
+    def summary(self) -> dict:
+        d = asdict(self)
+        for k in ("coords", "trace_moves", "trace_theta"):
+            d.pop(k)
+        return d
+
+
+def _tight_job(coords, params, moves, n_chunks, t_start, t_end, seed, replica, knot_name):
+    from stiffknots.engine.kernel import min_nonadjacent_segment_distance
+    from stiffknots.knots.identify import verify_knot
+
+    state = ChainState(coords, params, seed=seed)
+    n = state.n_beads
+    t0 = time.perf_counter()
+    n_anneal = int(moves * 0.9)
+    per = max(1, n_anneal // n_chunks)
+    temps = np.geomspace(t_start, t_end, n_chunks)
+    tm, tt = [], []
+    done = 0
+    theta_cap = float(np.max(state.turning_angles()))
+    for temp in list(temps) + [0.0] * 10:
+        m = per if temp > 0 else max(1, (moves - n_anneal) // 10)
+        state.run(m, float(temp))
+        done += m
+        th = float(np.max(state.turning_angles()))
+        if th < theta_cap:  # the ratchet: the limit follows the largest angle down
+            theta_cap = th
+            state.set_max_turn(theta_cap)
+        tm.append(done)
+        tt.append(th)
+    e_rec = state.recomputed_energy()
+    if abs(e_rec - state.energy) > 1e-7 * max(1.0, abs(e_rec)):
+        from stiffknots.engine.driver import EnergyBookkeepingError
+
+        raise EnergyBookkeepingError(
+            f"incremental energy {state.energy!r} differs from recomputed {e_rec!r}")
+    theta = float(np.max(state.turning_angles()))
+    ok, found = verify_knot(state.pos, knot_name)
+    return TightReplica(
+        replica=replica, seed=seed, theta_max=theta, length_over_R=length_over_R(theta, n),
+        coords=state.pos.copy(), trace_moves=np.asarray(tm), trace_theta=np.asarray(tt),
+        wall_time=time.perf_counter() - t0, exclusion_margin=-state.violation(),
+        min_segment_distance=float(min_nonadjacent_segment_distance(state.pos)),
+        energy_recomputed=e_rec, energy_incremental=state.energy, knot=found,
+        knot_verified=bool(ok))
+
+
+@dataclass
+class TightResult:
+    """Replicas of the restricted-curvature search for one knot, best (shortest) first."""
+
+    knot: str
+    beads: int
+    seed: int
+    settings: dict
+    replicas: list[TightReplica]
+    bounds: dict
+    wall_time: float
+    interrupted: bool = False
+    version: str = __version__
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def best(self) -> TightReplica:
+        if not self.replicas:
+            raise RuntimeError("no replica finished")
+        return self.replicas[0]
+
+    @property
+    def length_over_R(self) -> float:
+        return self.best.length_over_R
+
+    def to_dict(self) -> dict:
+        return {
+            "knot": self.knot,
+            "beads": self.beads,
+            "seed": self.seed,
+            "length_over_R": self.best.length_over_R if self.replicas else None,
+            "theta_max": self.best.theta_max if self.replicas else None,
+            "R": radius_of_turn(self.best.theta_max) if self.replicas else None,
+            "lower_bound": self.bounds.get("lower"),
+            "upper_bound": self.bounds.get("upper"),
+            "bounds": self.bounds,
+            "knot_verified": all(r.knot_verified for r in self.replicas),
+            "settings": self.settings,
+            "wall_time": self.wall_time,
+            "interrupted": self.interrupted,
+            "version": self.version,
+            "replicas": [r.summary() for r in self.replicas],
+        }
+
+    def save(self, out: str | Path) -> dict[str, Path]:
+        from stiffknots.chain import Chain, save
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "result.json").write_text(json.dumps(self.to_dict(), indent=2,
+                                                    default=_plain))
+        meta = {"knot": self.knot, "seed": self.best.seed,
+                "length_over_R": self.best.length_over_R, "version": self.version}
+        save(Chain(self.best.coords, closed=True, meta=meta), out / "best.xyz")
+        return {"result": out / "result.json", "best_xyz": out / "best.xyz"}
+
+
+def _plain(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(f"not JSON serialisable: {type(x)}")
+
+
+def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, replicas: int = 2,
+             seed: int = 0, *, exclusion: str = "bead", d: float | None = None,
+             w: float | None = None, power: int = 8, t_start: float = 1.0,
+             t_end: float = 1e-4, n_chunks: int = 200, workers: int | None = None,
+             on_replica_done: Callable[[TightReplica], None] | None = None) -> TightResult:
+    """Minimal length L†/R of ``knot`` under the curvature limit 1/R (paper §IX.D).
+
+    Parameters
+    ----------
+    knot : knot name.
+    beads : N; finer chains approach the thin limit (the exclusion is fixed in bond lengths).
+    moves : attempted moves per replica (90 % annealing, 10 % quench at T = 0).
+    replicas, seed, workers : as for :func:`stiffknots.anneal`.
+    exclusion, d, w : exclusion model and distances (bond lengths; defaults of MoveParams).
+    power : exponent p of the minimax energy Σ((1 − cos θ)/s)^p.
+    t_start, t_end, n_chunks : geometric cooling of that energy (in its own units).
+
+    Returns
+    -------
+    TightResult — ``length_over_R`` of the best replica and the bounds 2πn ≤ L†/R ≤
+    2π min(7n/3, i).
+    """
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.embedding import embed_braid
+    from stiffknots.theory.bounds import restricted_curvature_bounds
+
+    k = get_knot(knot)
+    if replicas < 1:
+        raise ValueError(f"replicas must be ≥ 1, got {replicas}")
+    if int(power) != power or power < 1:
+        raise ValueError(f"power must be an integer ≥ 1, got {power}")
+    if moves < 10_000:
+        raise ValueError(f"moves must be ≥ 10,000, got {moves}")
+    nb = int(k.bridge_number or 1)
+    theta_ref = 2 * np.pi * nb / beads
+    kw = {"exclusion": exclusion, "energy": "power", "power": int(power),
+          "energy_scale": float(1 - np.cos(theta_ref))}
+    if d is not None:
+        kw["d"] = d
+    if w is not None:
+        kw["w"] = w
+    params = MoveParams(**kw)
+    params.validate(beads)
+    word = k.braid_word or ()
+    coords = embed_braid(word, n_strands=k.braid_strands if word else None, n_beads=beads)
+    seeds = replica_seeds(seed, replicas)
+    nw = workers or default_workers(replicas)
+    t0 = time.perf_counter()
+    args = [(coords, params, int(moves), int(n_chunks), float(t_start), float(t_end), s, r,
+             k.name) for r, s in enumerate(seeds)]
+    results, interrupted = run_jobs(_tight_job, args, nw, on_replica_done)
+    results.sort(key=lambda r: r.length_over_R)
+    bad = [r for r in results if not r.knot_verified]
+    if bad:
+        raise TopologyChangedError(
+            f"{len(bad)} replica(s) of {k.name} ended as {', '.join(str(r.knot) for r in bad)}"
+            f"; this is a bug, please report it with seed {seed}")
+    b = restricted_curvature_bounds(k.bridge_number, k.braid_index, R=1.0)
+    bounds = {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
+    settings = {"moves": int(moves), "power": int(power), "t_start": t_start, "t_end": t_end,
+                "n_chunks": int(n_chunks), "params": params.as_dict()}
+    return TightResult(knot=k.name, beads=beads, seed=seed, settings=settings,
+                       replicas=results, bounds=bounds, wall_time=time.perf_counter() - t0,
+                       interrupted=interrupted)
