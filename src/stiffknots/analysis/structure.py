@@ -1,0 +1,636 @@
+"""Line-braids, point-braids, multiple points and the structure graph (paper §V, Figs 5 and 9).
+
+§V.B of the paper describes the shape of a knot in the thin limit ``w → 0`` as a *structure*
+``{S}``: line-braids (``m`` strands that have shrunk laterally onto one curve; a single string is
+a line-braid of multiplicity ``m = 1``) connected at *multiple points* (strands crossing at an
+angle, Fig. fig:accum c) and *point-braids* (a braid shrunk laterally and then in length; the
+strands enter and leave it tangentially along one axis, Fig. fig:accum d). Fig. fig:structure
+sketches such a structure; Fig. fig:MC_braids (Fig. 9 of the paper) marks them on the Monte Carlo
+shapes: a line-braid of multiplicity 2 for the trefoil, two point-braids in the 4-fold cage, one
+point-braid and three double points in the "80".
+
+At finite width these objects are read off the contact map
+(:func:`stiffknots.analysis.contacts.contact_map`):
+
+local multiplicity ``m(s)``
+    One plus the number of distinct strands touching bead ``s``: the beads in contact with
+    ``s`` are split into strands wherever their indices jump by more than ``max_gap``
+    (default: the contact map's ``min_sep``), cyclically for a closed chain
+    (:func:`local_multiplicity`).
+line-braid
+    A maximal stretch of the chain with constant ``m(s) = m >= 2`` and an arc length of at
+    least ``min_length``; the stretches of the strands running together are grouped (through
+    their contacts) into one :class:`LineBraid` of multiplicity ``m``.
+contact zone
+    A connected group of contact runs (maximal stretches with ``m(s) >= 2``, linked by their
+    contacts). It is a *line-braid* zone when its longest run reaches ``min_length``; a shorter
+    zone is a *point-braid* when its strands are tangent (median ``|t_i·t_j|`` over its
+    contacts at least ``cos(tangent_angle)``, default 35°) and a *multiple point* otherwise.
+structure graph
+    Nodes: point-braids, multiple points and the two ends of every line-braid zone (and the two
+    free ends of an open chain). Edges: the line-braid zones (multiplicity ``m``) and the free
+    arcs between zones (multiplicity 1). A closed chain without contacts, or one lying entirely
+    in one line-braid (the circular braid, §VI.C), is a single closed edge without nodes.
+
+Default ``min_length``: ``max(3 × cutoff, 0.1 L)``. In the thin limit a line-braid keeps a finite
+fraction of the length (its length is ``L (ε_p/ε)^{1/2}``, eq. e:L_P_parts) while a point-braid
+shrinks with ``w``; on the paper's ``N = 150`` chains the point-braids span 5 to 12 bonds, below
+``0.1 L = 15``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from stiffknots.analysis.contacts import (
+    DEFAULT_CONTACT_FACTOR,
+    DEFAULT_D,
+    DEFAULT_MIN_SEP,
+    ContactMap,
+    as_coords,
+    contact_map,
+)
+
+__all__ = [
+    "DEFAULT_TANGENT_ANGLE",
+    "LineBraid",
+    "ContactZone",
+    "Node",
+    "Edge",
+    "StructureGraph",
+    "Structure",
+    "local_multiplicity",
+    "line_braids",
+    "analyse_structure",
+    "structure_graph",
+    "tangents",
+    "cyclic_runs",
+]
+
+#: Largest angle (degrees) between the strands of a point-braid; wider contacts are crossings.
+DEFAULT_TANGENT_ANGLE = 35.0
+
+
+# --------------------------------------------------------------------------------------------
+# small helpers
+# --------------------------------------------------------------------------------------------
+
+
+def tangents(x: np.ndarray, closed: bool = True) -> np.ndarray:
+    """Unit tangents at the beads (central differences; one-sided at the ends of an open
+    chain)."""
+    if closed:
+        t = np.roll(x, -1, axis=0) - np.roll(x, 1, axis=0)
+    else:
+        t = np.empty_like(x)
+        t[1:-1] = x[2:] - x[:-2]
+        t[0] = x[1] - x[0]
+        t[-1] = x[-1] - x[-2]
+    norm = np.linalg.norm(t, axis=1)
+    norm[norm == 0.0] = 1.0
+    return t / norm[:, None]
+
+
+def cyclic_runs(mask: np.ndarray, closed: bool = True) -> list[tuple[int, int]]:
+    """Maximal runs of True in a boolean array, as ``(start, length)``.
+
+    For a closed chain a run may wrap around the end (``start + length > N``); a mask that is
+    all True gives ``[(0, N)]``.
+    """
+    mask = np.asarray(mask, dtype=bool)
+    n = mask.shape[0]
+    if n == 0 or not mask.any():
+        return []
+    if mask.all():
+        return [(0, n)]
+    padded = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    diff = np.diff(padded)
+    starts = np.flatnonzero(diff == 1)
+    ends = np.flatnonzero(diff == -1)
+    runs = [(int(s), int(e - s)) for s, e in zip(starts, ends, strict=True)]
+    if closed and len(runs) > 1 and mask[0] and mask[-1]:
+        first = runs.pop(0)
+        last = runs.pop()
+        runs.append((last[0], last[1] + first[1]))
+    return runs
+
+
+def _value_runs(values: np.ndarray, closed: bool) -> list[tuple[int, int, int]]:
+    """Maximal runs of equal values: ``(start, length, value)``, wrapping if closed."""
+    n = values.shape[0]
+    change = np.flatnonzero(values[1:] != values[:-1]) + 1
+    if change.size == 0:
+        return [(0, n, int(values[0]))]
+    bounds = np.concatenate([[0], change, [n]])
+    runs = [(int(a), int(b - a), int(values[a])) for a, b in zip(bounds[:-1], bounds[1:],
+                                                                  strict=True)]
+    if closed and len(runs) > 1 and values[0] == values[-1]:
+        first = runs.pop(0)
+        last = runs.pop()
+        runs.append((last[0], last[1] + first[1], last[2]))
+    return runs
+
+
+def _run_beads(start: int, length: int, n: int) -> np.ndarray:
+    return (start + np.arange(length)) % n
+
+
+def _bond_lengths(x: np.ndarray, closed: bool) -> np.ndarray:
+    if closed:
+        return np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)
+    return np.linalg.norm(x[1:] - x[:-1], axis=1)
+
+
+def _run_arc_length(start: int, length: int, bonds: np.ndarray, n: int, closed: bool) -> float:
+    """Arc length of a run of beads: its ``length - 1`` inner bonds, or all bonds when the run
+    is the whole closed chain."""
+    if closed and length >= n:
+        return float(bonds.sum())
+    if length <= 1:
+        return 0.0
+    idx = (start + np.arange(length - 1)) % n
+    return float(bonds[idx].sum())
+
+
+class _UnionFind:
+    def __init__(self, n: int) -> None:
+        self.parent = np.arange(n)
+
+    def find(self, a: int) -> int:
+        p = self.parent
+        root = a
+        while p[root] != root:
+            root = p[root]
+        while p[a] != root:
+            p[a], a = root, p[a]
+        return int(root)
+
+    def union(self, a: int, b: int) -> None:
+        ra, rb = self.find(a), self.find(b)
+        if ra != rb:
+            self.parent[max(ra, rb)] = min(ra, rb)
+
+
+def _group_runs(runs: list[tuple[int, int]], n: int, cmap: ContactMap) -> list[list[int]]:
+    """Group runs into components linked by contacts; returns lists of run indices."""
+    run_id = np.full(n, -1, dtype=np.int64)
+    for k, (s, ln) in enumerate(runs):
+        run_id[_run_beads(s, ln, n)] = k
+    uf = _UnionFind(len(runs))
+    ra, rb = run_id[cmap.i], run_id[cmap.j]
+    ok = (ra >= 0) & (rb >= 0) & (ra != rb)
+    for a, b in set(zip(ra[ok].tolist(), rb[ok].tolist(), strict=True)):
+        uf.union(a, b)
+    groups: dict[int, list[int]] = {}
+    for k in range(len(runs)):
+        groups.setdefault(uf.find(k), []).append(k)
+    return [sorted(g) for g in groups.values()]
+
+
+# --------------------------------------------------------------------------------------------
+# local multiplicity
+# --------------------------------------------------------------------------------------------
+
+
+def local_multiplicity(cmap: ContactMap, max_gap: int | None = None) -> np.ndarray:
+    """Local multiplicity ``m(s)``: 1 + the number of distinct strands touching bead ``s``.
+
+    The beads in contact with ``s`` are sorted by index and split into strands wherever two
+    consecutive ones are more than ``max_gap`` apart (cyclically for a closed chain), so a strand
+    passing by counts once however many of its beads touch ``s`` (§V: the ``m`` strands of a
+    line-braid of multiplicity ``m``).
+
+    Parameters
+    ----------
+    cmap : ContactMap
+        From :func:`~stiffknots.analysis.contacts.contact_map`.
+    max_gap : int, optional
+        Largest index gap inside one strand; default ``cmap.min_sep``.
+
+    Returns
+    -------
+    ndarray of int, shape (N,)
+    """
+    if not isinstance(cmap, ContactMap):
+        raise ValueError(f"local_multiplicity needs a ContactMap (from contact_map()), got "
+                         f"{type(cmap).__name__}")
+    gap = cmap.min_sep if max_gap is None else int(max_gap)
+    if gap < 1:
+        raise ValueError(f"max_gap must be an integer >= 1, got {max_gap!r}")
+    n = cmap.n
+    m = np.ones(n, dtype=np.int64)
+    if cmap.n_contacts == 0:
+        return m
+    src, dst = cmap.directed()
+    same = src[1:] == src[:-1]
+    jump = same & (np.diff(dst) > gap)
+    breaks = np.bincount(src[1:][jump], minlength=n)
+    has = np.bincount(src, minlength=n) > 0
+    clusters = np.where(has, 1 + breaks, 0)
+    if cmap.closed:
+        first_pos = np.flatnonzero(np.concatenate([[True], ~same]))
+        last_pos = np.concatenate([first_pos[1:] - 1, [src.size - 1]])
+        owner = src[first_pos]
+        wrap = dst[first_pos] + n - dst[last_pos]
+        merge = (wrap <= gap) & (breaks[owner] >= 1)
+        clusters[owner[merge]] -= 1
+    return m + clusters
+
+
+# --------------------------------------------------------------------------------------------
+# data classes
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class LineBraid:
+    """A line-braid (§V.B): stretches of the chain with constant multiplicity ``m >= 2`` that
+    touch each other.
+
+    Attributes
+    ----------
+    multiplicity : int
+        ``m``, the number of strands running together.
+    stretches : list of (start, length)
+        The stretches (bead runs, possibly wrapping for a closed chain).
+    length : float
+        Mean arc length of the stretches (bond units).
+    closed : bool
+        True when the braid covers the whole closed chain (no ends): the circular braid.
+    """
+
+    multiplicity: int
+    stretches: list[tuple[int, int]]
+    length: float
+    closed: bool = False
+
+    def to_dict(self) -> dict:
+        return {"multiplicity": self.multiplicity, "stretches": [list(s) for s in self.stretches],
+                "length": self.length, "closed": self.closed}
+
+
+@dataclass
+class ContactZone:
+    """A connected group of contact runs: a line-braid, a point-braid or a multiple point.
+
+    Attributes
+    ----------
+    kind : str
+        ``"line-braid"``, ``"point-braid"`` or ``"multiple-point"``.
+    runs : list of (start, length)
+        The runs of beads in contact (one per strand passage).
+    multiplicity : int
+        Largest local multiplicity ``m(s)`` in the zone (strands meeting there).
+    length : float
+        Arc length of the longest run (bond units).
+    alignment : float
+        Median ``|t_i·t_j|`` over the zone's contacts (1: tangent strands, 0: perpendicular).
+    centre : ndarray, shape (3,)
+        Mean position of its beads.
+    closed : bool
+        The zone is the whole closed chain.
+    """
+
+    kind: str
+    runs: list[tuple[int, int]]
+    multiplicity: int
+    length: float
+    alignment: float
+    centre: np.ndarray
+    closed: bool = False
+
+    @property
+    def strands(self) -> int:
+        """Number of strand passages (runs) through the zone."""
+        return len(self.runs)
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "runs": [list(r) for r in self.runs],
+                "multiplicity": self.multiplicity, "length": self.length,
+                "alignment": self.alignment, "centre": self.centre.tolist(),
+                "closed": self.closed}
+
+
+@dataclass
+class Node:
+    """A node of the structure graph.
+
+    ``kind``: ``"point-braid"``, ``"multiple-point"``, ``"braid-end"`` (an end of a
+    line-braid) or ``"chain-end"`` (a free end of an open chain). ``zone``: index of its contact
+    zone (``None`` for chain ends). ``beads``: the beads at the node. ``position``: their mean.
+    """
+
+    index: int
+    kind: str
+    zone: int | None
+    beads: list[int]
+    position: np.ndarray
+
+    def to_dict(self) -> dict:
+        return {"index": self.index, "kind": self.kind, "zone": self.zone,
+                "beads": list(self.beads), "position": self.position.tolist()}
+
+
+@dataclass
+class Edge:
+    """An edge of the structure graph: a line-braid (``multiplicity >= 2``) or a free arc
+    (``multiplicity == 1``).
+
+    ``nodes``: the two end nodes (``(None, None)`` for a closed edge without nodes).
+    ``stretches``: its bead runs ``(start, length)``. ``length``: arc length per strand.
+    """
+
+    index: int
+    kind: str
+    multiplicity: int
+    nodes: tuple[int | None, int | None]
+    stretches: list[tuple[int, int]]
+    length: float
+    zone: int | None = None
+
+    def to_dict(self) -> dict:
+        return {"index": self.index, "kind": self.kind, "multiplicity": self.multiplicity,
+                "nodes": list(self.nodes), "stretches": [list(s) for s in self.stretches],
+                "length": self.length, "zone": self.zone}
+
+
+@dataclass
+class StructureGraph:
+    """The structure ``{S}`` of §V.B as a multigraph: line-braids and arcs joined at nodes."""
+
+    nodes: list[Node]
+    edges: list[Edge]
+
+    def degree(self, node: int) -> int:
+        """Number of edge ends at ``node`` (a self-loop counts twice)."""
+        return sum((e.nodes[0] == node) + (e.nodes[1] == node) for e in self.edges)
+
+    def counts(self) -> dict[str, int]:
+        """Numbers of nodes and edges by kind."""
+        out: dict[str, int] = {}
+        for nd in self.nodes:
+            out[nd.kind] = out.get(nd.kind, 0) + 1
+        for e in self.edges:
+            key = "line-braid" if e.kind == "line-braid" else "arc"
+            out[key] = out.get(key, 0) + 1
+        return out
+
+    def summary(self) -> str:
+        """One line, e.g. ``"2 point-braid, 4 arc"``."""
+        return ", ".join(f"{v} {k}" for k, v in sorted(self.counts().items())) or "empty"
+
+    def to_dict(self) -> dict:
+        return {"nodes": [nd.to_dict() for nd in self.nodes],
+                "edges": [e.to_dict() for e in self.edges], "summary": self.summary()}
+
+
+@dataclass
+class Structure:
+    """Everything :func:`analyse_structure` finds on one chain.
+
+    Attributes
+    ----------
+    contact_map : ContactMap
+    multiplicity : ndarray of int, shape (N,)
+        Local multiplicity ``m(s)``.
+    line_braids : list of LineBraid
+    zones : list of ContactZone
+    graph : StructureGraph
+    length : float
+        Contour length ``L``.
+    min_length : float
+        The line-braid length threshold used.
+    params : dict
+        The parameters used (cutoff, min_sep, min_length, tangent_angle).
+    """
+
+    contact_map: ContactMap
+    multiplicity: np.ndarray
+    line_braids: list[LineBraid]
+    zones: list[ContactZone]
+    graph: StructureGraph
+    length: float
+    min_length: float
+    params: dict = field(default_factory=dict)
+
+    def zone_counts(self) -> dict[str, int]:
+        """Numbers of contact zones by kind."""
+        out = {"line-braid": 0, "point-braid": 0, "multiple-point": 0}
+        for z in self.zones:
+            out[z.kind] += 1
+        return out
+
+    def to_dict(self) -> dict:
+        return {
+            "params": dict(self.params),
+            "length": self.length,
+            "n_contacts": self.contact_map.n_contacts,
+            "contact_fraction": float(np.mean(self.multiplicity >= 2)),
+            "max_multiplicity": int(self.multiplicity.max()),
+            "line_braids": [b.to_dict() for b in self.line_braids],
+            "zones": [z.to_dict() for z in self.zones],
+            "zone_counts": self.zone_counts(),
+            "graph": self.graph.to_dict(),
+        }
+
+
+# --------------------------------------------------------------------------------------------
+# analysis
+# --------------------------------------------------------------------------------------------
+
+
+def _check_angle(tangent_angle: Any) -> float:
+    try:
+        a = float(tangent_angle)
+    except (TypeError, ValueError):
+        raise ValueError(f"tangent_angle must be a number of degrees in (0, 90), got "
+                         f"{tangent_angle!r}") from None
+    if not 0.0 < a < 90.0:
+        raise ValueError(f"tangent_angle must be in (0, 90) degrees, got {tangent_angle!r}")
+    return a
+
+
+def _line_braids(m: np.ndarray, cmap: ContactMap, bonds: np.ndarray, min_length: float,
+                 closed: bool) -> list[LineBraid]:
+    n = m.shape[0]
+    stretches = [(s, ln) for s, ln, v in _value_runs(m, closed)
+                 if v >= 2 and _run_arc_length(s, ln, bonds, n, closed) >= min_length]
+    if not stretches:
+        return []
+    out = []
+    for group in _group_runs(stretches, n, cmap):
+        runs = [stretches[k] for k in group]
+        mult = int(m[runs[0][0]])
+        lengths = [_run_arc_length(s, ln, bonds, n, closed) for s, ln in runs]
+        whole = closed and len(runs) == 1 and runs[0][1] >= n
+        out.append(LineBraid(mult, runs, float(np.mean(lengths)), bool(whole)))
+    out.sort(key=lambda b: min(s for s, _ in b.stretches))
+    return out
+
+
+def _zones(x: np.ndarray, m: np.ndarray, cmap: ContactMap, bonds: np.ndarray,
+           min_length: float, cos_tan: float, closed: bool) -> list[ContactZone]:
+    n = x.shape[0]
+    runs = cyclic_runs(m >= 2, closed)
+    if not runs:
+        return []
+    t = tangents(x, closed)
+    run_id = np.full(n, -1, dtype=np.int64)
+    for k, (s, ln) in enumerate(runs):
+        run_id[_run_beads(s, ln, n)] = k
+    pair_align = np.abs(np.einsum("ij,ij->i", t[cmap.i], t[cmap.j]))
+    pair_run = run_id[cmap.i]
+    zones = []
+    for group in _group_runs(runs, n, cmap):
+        zr = [runs[k] for k in group]
+        beads = np.concatenate([_run_beads(s, ln, n) for s, ln in zr])
+        length = max(_run_arc_length(s, ln, bonds, n, closed) for s, ln in zr)
+        sel = np.isin(pair_run, group)
+        align = float(np.median(pair_align[sel])) if sel.any() else 1.0
+        whole = closed and len(zr) == 1 and zr[0][1] >= n
+        if whole or length >= min_length:
+            kind = "line-braid"
+        elif align >= cos_tan:
+            kind = "point-braid"
+        else:
+            kind = "multiple-point"
+        zones.append(ContactZone(kind, zr, int(m[beads].max()), float(length), align,
+                                 x[beads].mean(axis=0), bool(whole)))
+    zones.sort(key=lambda z: min(s for s, _ in z.runs))
+    return zones
+
+
+def _graph(x: np.ndarray, zones: list[ContactZone], m: np.ndarray, bonds: np.ndarray,
+           closed: bool) -> StructureGraph:
+    n = x.shape[0]
+    nodes: list[Node] = []
+    edges: list[Edge] = []
+    # node attached to the first / last bead of every contact run
+    first_node: dict[int, int] = {}
+    last_node: dict[int, int] = {}
+    for zi, z in enumerate(zones):
+        if z.kind != "line-braid":
+            beads = sorted(int(b) for s, ln in z.runs for b in _run_beads(s, ln, n))
+            nodes.append(Node(len(nodes), z.kind, zi, beads, x[beads].mean(axis=0)))
+            for s, ln in z.runs:
+                first_node[s] = last_node[(s + ln - 1) % n] = nodes[-1].index
+            continue
+        if z.closed:
+            edges.append(Edge(len(edges), "line-braid", z.multiplicity, (None, None),
+                              list(z.runs), z.length, zi))
+            continue
+        # two ends: orient every run against the longest one
+        ref = max(z.runs, key=lambda r: r[1])
+        pa, pb = x[ref[0]], x[(ref[0] + ref[1] - 1) % n]
+        ends: tuple[list[int], list[int]] = ([], [])
+        for s, ln in z.runs:
+            e = (s + ln - 1) % n
+            direct = np.linalg.norm(x[s] - pa) + np.linalg.norm(x[e] - pb)
+            swapped = np.linalg.norm(x[s] - pb) + np.linalg.norm(x[e] - pa)
+            a_end, b_end = (s, e) if direct <= swapped else (e, s)
+            ends[0].append(a_end)
+            ends[1].append(b_end)
+        ids = []
+        for side in ends:
+            nodes.append(Node(len(nodes), "braid-end", zi, sorted(side),
+                              x[side].mean(axis=0)))
+            ids.append(nodes[-1].index)
+        for (s, ln), a_end in zip(z.runs, ends[0], strict=True):
+            e = (s + ln - 1) % n
+            first_node[s] = ids[0] if a_end == s else ids[1]
+            last_node[e] = ids[0] if a_end == e else ids[1]
+        lengths = [_run_arc_length(s, ln, bonds, n, closed) for s, ln in z.runs]
+        edges.append(Edge(len(edges), "line-braid", z.multiplicity, (ids[0], ids[1]),
+                          list(z.runs), float(np.mean(lengths)), zi))
+    # free arcs (m = 1) between contact runs
+    free = m < 2
+    if not closed:
+        ends_nodes = []
+        for b in (0, n - 1):
+            if free[b]:
+                nodes.append(Node(len(nodes), "chain-end", None, [b], x[b].copy()))
+                ends_nodes.append(nodes[-1].index)
+            else:
+                ends_nodes.append(None)
+    for s, ln in cyclic_runs(free, closed):
+        e = (s + ln - 1) % n
+        if closed and ln >= n:
+            edges.append(Edge(len(edges), "arc", 1, (None, None), [(s, ln)],
+                              float(bonds.sum())))
+            continue
+        if closed:
+            u = last_node.get((s - 1) % n)
+            v = first_node.get((e + 1) % n)
+        else:
+            u = last_node.get(s - 1) if s > 0 else ends_nodes[0]
+            v = first_node.get(e + 1) if e < n - 1 else ends_nodes[1]
+        # the arc includes the bonds joining it to its nodes
+        full = ln + (1 if (closed or s > 0) else 0) + (1 if (closed or e < n - 1) else 0)
+        start = (s - 1) % n if (closed or s > 0) else s
+        length = _run_arc_length(start, min(full, n), bonds, n, closed) if full > 1 else 0.0
+        edges.append(Edge(len(edges), "arc", 1, (u, v), [(s, ln)], length))
+    return StructureGraph(nodes, edges)
+
+
+def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
+                      factor: float = DEFAULT_CONTACT_FACTOR, cutoff: float | None = None,
+                      min_sep: int = DEFAULT_MIN_SEP, min_length: float | None = None,
+                      tangent_angle: float = DEFAULT_TANGENT_ANGLE) -> Structure:
+    """Contacts, local multiplicity, line-braids, contact zones and the structure graph.
+
+    Parameters
+    ----------
+    coords : array_like, shape (N, 3)
+        Bead positions.
+    closed : bool, default True
+        Closed or open chain.
+    d, factor, cutoff, min_sep :
+        Contact rule, see :func:`~stiffknots.analysis.contacts.contact_map`.
+    min_length : float, optional
+        Shortest line-braid (arc length, bond units); default ``max(3 × cutoff, 0.1 L)``.
+    tangent_angle : float, default 35
+        Largest angle (degrees) between the strands of a point-braid (§V.B: strands leave a
+        point-braid tangentially); contacts at wider angles are multiple points.
+
+    Returns
+    -------
+    Structure
+    """
+    x = as_coords(coords, closed)
+    cmap = contact_map(x, closed, d=d, factor=factor, cutoff=cutoff, min_sep=min_sep)
+    bonds = _bond_lengths(x, closed)
+    total = float(bonds.sum())
+    if min_length is None:
+        min_len = max(3.0 * cmap.cutoff, 0.1 * total)
+    else:
+        try:
+            min_len = float(min_length)
+        except (TypeError, ValueError):
+            raise ValueError(f"min_length must be a non-negative number (bond units), got "
+                             f"{min_length!r}") from None
+        if not math.isfinite(min_len) or min_len < 0.0:
+            raise ValueError(f"min_length must be a non-negative finite number, got "
+                             f"{min_length!r}")
+    angle = _check_angle(tangent_angle)
+    cos_tan = math.cos(math.radians(angle))
+    m = local_multiplicity(cmap)
+    braids = _line_braids(m, cmap, bonds, min_len, closed)
+    zones = _zones(x, m, cmap, bonds, min_len, cos_tan, closed)
+    graph = _graph(x, zones, m, bonds, closed)
+    params = {"cutoff": cmap.cutoff, "min_sep": cmap.min_sep, "min_length": min_len,
+              "tangent_angle": angle}
+    return Structure(cmap, m, braids, zones, graph, total, min_len, params)
+
+
+def line_braids(coords: Any, closed: bool = True, **kwargs: Any) -> list[LineBraid]:
+    """The line-braids of a chain (keyword arguments as :func:`analyse_structure`)."""
+    return analyse_structure(coords, closed, **kwargs).line_braids
+
+
+def structure_graph(coords: Any, closed: bool = True, **kwargs: Any) -> StructureGraph:
+    """The structure graph of a chain (keyword arguments as :func:`analyse_structure`)."""
+    return analyse_structure(coords, closed, **kwargs).graph
