@@ -76,3 +76,28 @@ def test_anneal_json_small(tmp_path):
     assert d["epsilon"] >= d["bounds"]["lower"] * 0.99
     for f in ("result.json", "best.xyz", "best.json", "best.png"):
         assert (tmp_path / f).exists()
+    # the best chain names its shape (issue: single runs name their shape)
+    assert d["shape"] in ("CB", "4C", "80", "other")
+    assert (d["multiplicity"] is not None) == (d["shape"] == "CB")
+
+
+def test_paper_tiny_writes_report(tmp_path):
+    rc, out, err = run("paper", "--budget", "tiny", "--out", str(tmp_path), "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    assert set(d["knots"]) == {"3_1", "4_1", "5_2", "6_2", "6_3"}
+    for k in d["knots"].values():
+        for model in ("bead", "tube"):
+            g = k[model]["ground"]
+            assert g["shape"] in ("CB", "4C", "80", "other")
+            assert g["epsilon"] >= k["lower_bound"] * 0.99  # ε* ≥ 2π²n² (§IV)
+            assert k[model]["knot_verified"]
+            assert g["epsilon"] == min(k[model]["replica_epsilons"])
+            assert (tmp_path / g["picture"]).exists()
+            if model == "tube":  # the tube model keeps every segment pair ≥ w apart
+                assert g["min_segment_distance"] >= 1 / 2**0.5 - 1e-9
+        assert k["ground"] == k["bead"]["ground"]
+    for f in ("report.md", "report.html", "summary.json", "eps_vs_n2.png", "elastica.png"):
+        assert (tmp_path / f).exists()
+    html = (tmp_path / "report.html").read_text()
+    assert "<table" in html and "4_1" in html

@@ -122,13 +122,15 @@ def test_knotinfo_through_8_crossings(name, word):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name,word", _knotinfo(10, 9), ids=lambda v: v if isinstance(v, str) else "")
+@pytest.mark.parametrize("name,word", _knotinfo(10, 9),
+                         ids=lambda v: v if isinstance(v, str) else "")
 def test_knotinfo_9_and_10_crossings(name, word):
     _check_knot(name, word)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name,word", _knotinfo(10, 3), ids=lambda v: v if isinstance(v, str) else "")
+@pytest.mark.parametrize("name,word", _knotinfo(10, 3),
+                         ids=lambda v: v if isinstance(v, str) else "")
 def test_minimal_embedding_keeps_knot_type(name, word):
     n = minimal_beads(word)
     assert n <= 150

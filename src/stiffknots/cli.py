@@ -201,6 +201,13 @@ def _anneal_settings(moves, exclusion, schedule, t_start, t_end, delta, m_max):
     return sch, params
 
 
+def _shape_of(coords, params):
+    """The shape class of a closed chain (stiffknots.analysis.classify, §VII)."""
+    from stiffknots.analysis import classify
+
+    return classify(coords, d=params.w if params.exclusion == "tube" else params.d)
+
+
 @app.command()
 def anneal(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
@@ -237,6 +244,9 @@ def anneal(
                   params=params, on_replica_done=lambda r: prog.advance(task))
     d = res.to_dict()
     d["knot"] = res.best.knot
+    shape = _shape_of(res.best.coords, params)
+    d["shape"], d["multiplicity"] = shape.label, shape.multiplicity
+    d["shape_reason"] = shape.reason
     if out_dir is not None:
         from stiffknots.report.render import save_chain_png
 
@@ -258,6 +268,9 @@ def anneal(
                   f"{r.acceptance['multi']['rate']:.3f}", f"{r.wall_time:.1f}")
     out.print(t)
     b = res.bounds
+    out.print(f"shape of the best chain: {shape.label}"
+              + (f" (i = {shape.multiplicity})" if shape.label == "CB" else "")
+              + f" — {shape.reason}")
     out.print(f"best ε = {res.best.epsilon:.4f}; bounds [{_fmt(b['lower'])}, {_fmt(b['upper'])}]"
               f" ({b['attained_by']}); wall time {res.wall_time:.1f} s"
               + (" [interrupted]" if res.interrupted else ""))

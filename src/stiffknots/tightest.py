@@ -12,11 +12,15 @@ lie on it at unit chords), so a chain whose largest turning angle is θ* has cur
 For fixed N the shortest knot in units of R is the chain with the smallest θ*, so the search
 minimises the largest turning angle of a chain of the knot type at fixed N:
 
-* energy Σ ((1 − cos θ_n)/s)^p with a large even p (default 8): as p grows this sum is
-  dominated by the largest angles, and its minimum approaches the minimax (s = 1 − cos θ_ref,
-  θ_ref = 2π n/N, keeps the numbers of order one);
-* a ratchet: after every chunk of moves the limit θ_max is lowered to the current largest
-  angle, and the kernel rejects any move that would bend a joint beyond it (unless it
+* a continuation in p of the energy Σ ((1 − cos θ_n)/s)^p: p = 1 is the paper's bending
+  energy, annealed as in §VII (a smooth shape of the knot), then p = 2, 4, …, 64, each annealed
+  from the previous shape with s = 1 − cos θ₉₀ (θ₉₀ the 90th percentile of the angles, so the
+  energies stay of order one). As p grows the sum is dominated by the largest angles and its
+  minimum approaches the minimax. A direct start at large p jams: the sharp joints of the
+  embedding dominate and nothing else can move (measured: 5_2 stays near L/R ≈ 29–34
+  instead of 19.7);
+* a ratchet quench: the limit θ_max is lowered to the current largest angle after every
+  chunk, and the kernel rejects any move that would bend a joint beyond it (unless it
   straightens it), so θ* never grows again;
 * the exclusion (bead or tube) is kept, as a regulariser of the thin knot: it must be small
   compared with R (d/R ≈ 4π d/N for a doubly covered circle), so refining N approaches the
@@ -46,6 +50,7 @@ from stiffknots.engine.pool import run_jobs
 from stiffknots.engine.state import ChainState, MoveParams
 
 DEFAULT_TIGHT_MOVES = 30_000_000
+DEFAULT_POWERS = (1, 2, 4, 8, 16, 32, 64)
 
 
 def length_over_R(theta_max: float, n_beads: int) -> float:
@@ -84,27 +89,55 @@ class TightReplica:
         return d
 
 
-def _tight_job(coords, params, moves, n_chunks, t_start, t_end, seed, replica, knot_name):
+def _tight_job(coords, params, moves, powers, seed, replica, knot_name):
+    """Worker: the continuation in p (see the module docstring), then the ratchet quench."""
+    from dataclasses import replace
+
     from stiffknots.engine.kernel import min_nonadjacent_segment_distance
+    from stiffknots.engine.schedules import Schedule
     from stiffknots.knots.identify import verify_knot
 
-    state = ChainState(coords, params, seed=seed)
-    n = state.n_beads
     t0 = time.perf_counter()
-    n_anneal = int(moves * 0.9)
-    per = max(1, n_anneal // n_chunks)
-    temps = np.geomspace(t_start, t_end, n_chunks)
+    n = len(coords)
+    n_stages = len(powers) + 1  # the last share of the moves is the ratchet quench
+    per_stage = max(1000, moves // n_stages)
+    nch = 100
+    pos = np.asarray(coords, dtype=float)
     tm, tt = [], []
     done = 0
-    theta_cap = float(np.max(state.turning_angles()))
-    for temp in list(temps) + [0.0] * 10:
-        m = per if temp > 0 else max(1, (moves - n_anneal) // 10)
-        state.run(m, float(temp))
-        done += m
+    state = None
+    for k, p in enumerate(powers):
+        if p == 1:
+            prm = replace(params, energy="bending")
+        else:
+            # scale: the 90th percentile of the turning angles, so energies are O(1)
+            th90 = float(np.percentile(ChainState(pos, replace(params, energy="bending"))
+                                       .turning_angles(), 90))
+            prm = replace(params, energy="power", power=int(p),
+                          energy_scale=float(1 - np.cos(max(th90, 1e-3))))
+        state = ChainState(pos, prm, seed=seed + 7919 * k)
+        e0 = state.energy / n
+        sch = Schedule()
+        for c in range(nch):
+            if p == 1:  # the paper's annealing of the bending energy: a smooth start
+                temp = float(sch.temperature((c + 0.5) / nch))
+            else:
+                temp = e0 * 1e-2 * 1e-3 ** (c / nch)
+            state.run(per_stage // nch, temp)
+            done += per_stage // nch
+        pos = state.pos.copy()
+        tm.append(done)
+        tt.append(float(np.max(state.turning_angles())))
+    # ratchet quench at the highest power: θ_max follows the largest angle down
+    cap = float(np.max(state.turning_angles()))
+    state.set_max_turn(cap)
+    for _ in range(20):
+        state.run(per_stage // 20, 0.0)
+        done += per_stage // 20
         th = float(np.max(state.turning_angles()))
-        if th < theta_cap:  # the ratchet: the limit follows the largest angle down
-            theta_cap = th
-            state.set_max_turn(theta_cap)
+        if th < cap:
+            cap = th
+            state.set_max_turn(cap)
         tm.append(done)
         tt.append(th)
     e_rec = state.recomputed_energy()
@@ -190,9 +223,9 @@ def _plain(x):
 
 
 def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, replicas: int = 2,
-             seed: int = 0, *, exclusion: str = "bead", d: float | None = None,
-             w: float | None = None, power: int = 8, t_start: float = 1.0,
-             t_end: float = 1e-4, n_chunks: int = 200, workers: int | None = None,
+             seed: int = 0, *, exclusion: str = "tube", d: float | None = None,
+             w: float | None = 0.25, powers: tuple[int, ...] = DEFAULT_POWERS,
+             workers: int | None = None,
              on_replica_done: Callable[[TightReplica], None] | None = None) -> TightResult:
     """Minimal length L†/R of ``knot`` under the curvature limit 1/R (paper §IX.D).
 
@@ -200,11 +233,13 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
     ----------
     knot : knot name.
     beads : N; finer chains approach the thin limit (the exclusion is fixed in bond lengths).
-    moves : attempted moves per replica (90 % annealing, 10 % quench at T = 0).
+    moves : attempted moves per replica, shared equally by the stages and the final quench.
     replicas, seed, workers : as for :func:`stiffknots.anneal`.
-    exclusion, d, w : exclusion model and distances (bond lengths; defaults of MoveParams).
-    power : exponent p of the minimax energy Σ((1 − cos θ)/s)^p.
-    t_start, t_end, n_chunks : geometric cooling of that energy (in its own units).
+    exclusion, d, w : exclusion model and distances in bond lengths. The thin knot of §IX.D
+        has no thickness: the default is a thin tube, w = 0.25 (the paper's bead rule,
+        d = 1/√2, is available and gives longer knots at a given N).
+    powers : the continuation p = 1 (the bending energy, annealed as in §VII), 2, 4, …, 64
+        of the minimax energy Σ((1 − cos θ)/s)^p.
 
     Returns
     -------
@@ -218,17 +253,14 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
     k = get_knot(knot)
     if replicas < 1:
         raise ValueError(f"replicas must be ≥ 1, got {replicas}")
-    if int(power) != power or power < 1:
-        raise ValueError(f"power must be an integer ≥ 1, got {power}")
+    if not powers or any(int(p) != p or p < 1 for p in powers):
+        raise ValueError(f"powers must be integers ≥ 1, got {powers}")
     if moves < 10_000:
         raise ValueError(f"moves must be ≥ 10,000, got {moves}")
-    nb = int(k.bridge_number or 1)
-    theta_ref = 2 * np.pi * nb / beads
-    kw = {"exclusion": exclusion, "energy": "power", "power": int(power),
-          "energy_scale": float(1 - np.cos(theta_ref))}
+    kw: dict = {"exclusion": exclusion}
     if d is not None:
         kw["d"] = d
-    if w is not None:
+    if w is not None and exclusion == "tube":
         kw["w"] = w
     params = MoveParams(**kw)
     params.validate(beads)
@@ -237,8 +269,8 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
     seeds = replica_seeds(seed, replicas)
     nw = workers or default_workers(replicas)
     t0 = time.perf_counter()
-    args = [(coords, params, int(moves), int(n_chunks), float(t_start), float(t_end), s, r,
-             k.name) for r, s in enumerate(seeds)]
+    args = [(coords, params, int(moves), tuple(int(p) for p in powers), s, r, k.name)
+            for r, s in enumerate(seeds)]
     results, interrupted = run_jobs(_tight_job, args, nw, on_replica_done)
     results.sort(key=lambda r: r.length_over_R)
     bad = [r for r in results if not r.knot_verified]
@@ -248,8 +280,7 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
             f"; this is a bug, please report it with seed {seed}")
     b = restricted_curvature_bounds(k.bridge_number, k.braid_index, R=1.0)
     bounds = {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
-    settings = {"moves": int(moves), "power": int(power), "t_start": t_start, "t_end": t_end,
-                "n_chunks": int(n_chunks), "params": params.as_dict()}
+    settings = {"moves": int(moves), "powers": list(powers), "params": params.as_dict()}
     return TightResult(knot=k.name, beads=beads, seed=seed, settings=settings,
                        replicas=results, bounds=bounds, wall_time=time.perf_counter() - t0,
                        interrupted=interrupted)

@@ -93,7 +93,8 @@ def parse_braid(word) -> list[int]:
         try:
             out = [int(t) for t in s.replace(";", ",").split(",") if t.strip()]
         except ValueError as exc:
-            raise EmbeddingError(f"cannot read braid word {word!r}: expected e.g. '[1,-2,1,-2]'") from exc
+            raise EmbeddingError(
+                f"cannot read braid word {word!r}: expected e.g. '[1,-2,1,-2]'") from exc
     else:
         out = [int(g) for g in word]
     if any(g == 0 for g in out):
@@ -200,7 +201,8 @@ def braid_curve(
     comps = _n_components(perm)
     if comps != 1:
         raise EmbeddingError(
-            f"the closure of braid {word} on {n} strands is a link with {comps} components, not a knot"
+            f"the closure of braid {word} on {n} strands is a link with {comps} components, "
+            "not a knot"
         )
     if samples_per_pass is None:
         samples_per_pass = max(400, 40 * len(word), int(8 * 2 * np.pi * radius))

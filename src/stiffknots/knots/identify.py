@@ -15,8 +15,8 @@ How it works
    for topoly's limit (``max_cross=60``, which in practice allows ~30 crossings), the reduced
    chain is viewed along 24 more fixed directions and the projection with the fewest crossings
    is used, with KMT and then topoly's fast Reidemeister I/II simplification ("EASY"); the full
-   Reidemeister simplification was found far too slow on such diagrams.  No random closure is involved, and
-   run_parallel/cuda are off: the answer is deterministic.
+   Reidemeister simplification was found far too slow on such diagrams.  No random closure is
+   involved, and run_parallel/cuda are off: the answer is deterministic.
 2. The polynomial (chiral: mirror images have mirrored polynomials) is looked up in topoly's
    bundled HOMFLY-PT table (all prime knots through 12 crossings plus many composite knots and
    links), without topoly's ``minimal`` filter, which silently drops the more complicated
@@ -35,11 +35,12 @@ separate:
 
     5_1 | 10_132,  8_8 | 10_129,  8_16 | 10_156,  10_25 | 10_56,  10_40 | 10_103
 
-plus 9_12 | 4_1#5_2 (a composite knot), and through 12 crossings a few more coincidences with 11- and 12-crossing knots (e.g.
-6_2 | 12n_25, 7_1 | 12n_749).  :func:`identify` reports such cases honestly as all candidates
-joined by ``'|'``, sorted by crossing number (e.g. ``'5_1|10_132'``); ``max_crossings=10`` keeps
-only the candidates through 10 crossings.  A polynomial not in the table gives ``'unknown'``
-(a knot with more than 12 crossings, or a composite/link not tabulated).
+plus 9_12 | 4_1#5_2 (a composite knot), and through 12 crossings a few more coincidences with
+11- and 12-crossing knots (e.g. 6_2 | 12n_25, 7_1 | 12n_749).  :func:`identify` reports such
+cases honestly as all candidates joined by ``'|'``, sorted by crossing number (e.g.
+``'5_1|10_132'``); ``max_crossings=10`` keeps only the candidates through 10 crossings.  A
+polynomial not in the table gives ``'unknown'`` (a knot with more than 12 crossings, or a
+composite/link not tabulated).
 
 Chirality: topoly's answer is chiral (it tells the mirror images of 3_1 apart), but topoly's
 +/- convention is not guaranteed to coincide with KnotInfo's, and the paper's energies do not
@@ -68,7 +69,9 @@ __all__ = [
     "crossing_number_of_name",
 ]
 
-_MAX_CROSS = 60  # topoly's limit (it counts each crossing about twice); HOMFLY-PT cost grows exponentially with the crossings of the reduced diagram
+# topoly's limit (it counts each crossing about twice); the HOMFLY-PT cost grows
+# exponentially with the crossings of the reduced diagram
+_MAX_CROSS = 60
 _LOCK = threading.Lock()
 
 
@@ -295,7 +298,8 @@ def _homfly_once(topoly, Closure, ReduceMethod, x, max_cross, method=None):
                 cuda=False,
             )
     except Exception as exc:  # topoly raises assorted exceptions
-        raise IdentificationError(f"topoly could not compute the HOMFLY-PT polynomial: {exc}") from exc
+        raise IdentificationError(
+            f"topoly could not compute the HOMFLY-PT polynomial: {exc}") from exc
     code = str(code).strip()
     if "TMC" in code or "Err" in code:
         return None
