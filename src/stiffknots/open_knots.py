@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from stiffknots._json import json_default
 from stiffknots._version import __version__
 from stiffknots.engine.driver import (
     AnnealSettings,
@@ -38,7 +39,7 @@ from stiffknots.engine.driver import (
     replica_seeds,
     run_replica,
 )
-from stiffknots.engine.pool import run_jobs
+from stiffknots.engine.pool import BestFirst, run_jobs
 from stiffknots.engine.schedules import Schedule
 from stiffknots.engine.state import MoveParams
 
@@ -121,7 +122,7 @@ def excess_length_for_force(eps_e: float, force: float, C: float = 1.0) -> float
 
 
 @dataclass
-class OpenResult:
+class OpenResult(BestFirst):
     """Replicas of one open knot at one excess length, best first."""
 
     knot: str
@@ -134,12 +135,6 @@ class OpenResult:
     interrupted: bool = False
     version: str = __version__
     bounds: dict = field(default_factory=dict)
-
-    @property
-    def best(self) -> ReplicaResult:
-        if not self.replicas:
-            raise RuntimeError("no replica finished")
-        return self.replicas[0]
 
     @property
     def eps_e(self) -> float:
@@ -185,19 +180,12 @@ class OpenResult:
 
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "result.json").write_text(json.dumps(self.to_dict(), indent=2, default=_plain))
+        (out / "result.json").write_text(json.dumps(self.to_dict(), indent=2, default=json_default))
         meta = {"knot": self.knot, "seed": self.best.seed, "eps_e": self.eps_e,
                 "excess_length": self.excess_length, "version": self.version}
         save(Chain(self.best.coords, closed=False, meta=meta), out / "best.xyz")
         return {"result": out / "result.json", "best_xyz": out / "best.xyz"}
 
-
-def _plain(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
 def _open_job(coords, settings, seed, replica, knot_name):

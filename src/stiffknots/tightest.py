@@ -40,13 +40,14 @@ from pathlib import Path
 
 import numpy as np
 
+from stiffknots._json import json_default
 from stiffknots._version import __version__
 from stiffknots.engine.driver import (
     TopologyChangedError,
     default_workers,
     replica_seeds,
 )
-from stiffknots.engine.pool import run_jobs
+from stiffknots.engine.pool import BestFirst, run_jobs
 from stiffknots.engine.state import ChainState, MoveParams
 
 DEFAULT_TIGHT_MOVES = 30_000_000
@@ -158,7 +159,7 @@ def _tight_job(coords, params, moves, powers, seed, replica, knot_name):
 
 
 @dataclass
-class TightResult:
+class TightResult(BestFirst):
     """Replicas of the restricted-curvature search for one knot, best (shortest) first."""
 
     knot: str
@@ -171,12 +172,6 @@ class TightResult:
     interrupted: bool = False
     version: str = __version__
     extra: dict = field(default_factory=dict)
-
-    @property
-    def best(self) -> TightReplica:
-        if not self.replicas:
-            raise RuntimeError("no replica finished")
-        return self.replicas[0]
 
     @property
     def length_over_R(self) -> float:
@@ -207,19 +202,12 @@ class TightResult:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         (out / "result.json").write_text(json.dumps(self.to_dict(), indent=2,
-                                                    default=_plain))
+                                                    default=json_default))
         meta = {"knot": self.knot, "seed": self.best.seed,
                 "length_over_R": self.best.length_over_R, "version": self.version}
         save(Chain(self.best.coords, closed=True, meta=meta), out / "best.xyz")
         return {"result": out / "result.json", "best_xyz": out / "best.xyz"}
 
-
-def _plain(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
 def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, replicas: int = 2,

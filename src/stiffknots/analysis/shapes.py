@@ -67,6 +67,7 @@ from typing import Any
 
 import numpy as np
 
+from stiffknots._json import to_plain
 from stiffknots.analysis.contacts import (
     DEFAULT_CONTACT_FACTOR,
     DEFAULT_D,
@@ -379,21 +380,6 @@ def _e80_features(x: np.ndarray, st: Structure, length: float, th: Thresholds
     return best[1], best[2]
 
 
-def _plain(x: Any) -> Any:
-    """Nested features as plain Python (JSON-able) values."""
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _plain(x.tolist())
-    if isinstance(x, np.bool_ | bool):
-        return bool(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.floating):
-        return float(x)
-    return x
 
 
 def shape_features(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
@@ -419,7 +405,7 @@ def shape_features(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
     cb_f, cb_c = _cb_features(x, g["length"], g["total_curvature"], th)
     c4_f, c4_c = _c4_features(x, st, g, th)
     e_f, e_c = _e80_features(x, st, g["length"], th)
-    features = _plain({"global": g, "CB": cb_f, "4C": c4_f, "80": e_f})
+    features = to_plain({"global": g, "CB": cb_f, "4C": c4_f, "80": e_f})
     checks = {lab: {k: bool(v) for k, v in c.items()}
               for lab, c in (("CB", cb_c), ("4C", c4_c), ("80", e_c))}
     return features, checks, st
@@ -462,7 +448,7 @@ def classify(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
                      "shapes (§VII)", {})
     features, checks, st = shape_features(x, True, d=d, factor=factor, cutoff=cutoff,
                                           min_sep=min_sep, thresholds=thresholds)
-    summary = _plain({"zones": st.zone_counts(), "graph": st.graph.summary(),
+    summary = to_plain({"zones": st.zone_counts(), "graph": st.graph.summary(),
                       "line_braids": [[b.multiplicity, round(b.length, 2)]
                                       for b in st.line_braids],
                       "params": st.params})

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from stiffknots._json import to_plain
 from stiffknots.analysis.shapes import LABELS, Shape, classify
 
 __all__ = ["StateGroup", "StateGroups", "group_states"]
@@ -72,7 +73,7 @@ class StateGroup:
         return {"name": self.name, "label": self.label, "multiplicity": self.multiplicity,
                 "count": self.count, "eps_min": self.eps_min, "eps_mean": self.eps_mean,
                 "eps_max": self.eps_max, "representative": self.representative,
-                "members": list(self.members), "meta": _plain(self.meta),
+                "members": list(self.members), "meta": to_plain(self.meta),
                 "reason": self.reason}
 
 
@@ -101,16 +102,6 @@ class StateGroups:
                 "metastable": [s.to_dict() for s in self.metastable]}
 
 
-def _plain(x: Any) -> Any:
-    if isinstance(x, Mapping):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return x
 
 
 def _get(item: Any, key: str, default: Any = None) -> Any:

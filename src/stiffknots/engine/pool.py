@@ -47,3 +47,16 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
             f.cancel()
         ex.shutdown(wait=False, cancel_futures=True)
     return results, interrupted
+
+
+class BestFirst:
+    """Mixin for results of independent replicas kept sorted best first (``replicas``)."""
+
+    replicas: list
+
+    @property
+    def best(self):
+        """The best replica (the first); RuntimeError if none finished (e.g. Ctrl-C)."""
+        if not self.replicas:
+            raise RuntimeError("no replica finished")
+        return self.replicas[0]

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from stiffknots._json import json_default
 from stiffknots._version import __version__
 
 PAPER_KNOTS = ("3_1", "4_1", "5_2", "6_2", "6_3")
@@ -163,18 +164,11 @@ def run_paper(budget: str = "small", out_dir: str | Path = "results/paper", seed
         "hierarchy": {"order": [(lab, v) for lab, v in h.entries], "holds": h.holds},
         "knots": knots, "wall_time": time.perf_counter() - t0,
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_plain))
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=json_default))
     _write_report(out, summary)
     say(f"report: {out / 'report.md'}, {out / 'report.html'} ({summary['wall_time']:.0f} s)")
     return summary
 
-
-def _plain(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
 def _states_text(block: dict) -> str:
