@@ -1,6 +1,10 @@
 """Full benchmark run (make bench): prints numbers and writes bench/last_run.json.
 
-10 seeds per target, both cores (each run single-threaded on one core).
+10 seeds per target, both cores (each run single-threaded on one core), with the default
+annealing settings (AnnealSettings(): 30 M moves, relaxation stage then the paper's power-law
+annealing, §VII). Seconds to target are recorded as wall-clock and CPU seconds, with the load
+average before and after (other jobs on the machine inflate the wall clock); see
+bench/RESULTS.md for the tuning and for the tempering comparison (bench/compare_tempering.py).
 """
 
 import json

@@ -4,6 +4,9 @@ Composes catalogue → embedding → engine (replicas on all cores) → verifica
 is verified: energy recomputed from scratch equals the incremental one, bonds are unit, the
 exclusion rule holds, and the knot type (HOMFLY-PT via topoly) equals the requested one — a
 changed topology raises :class:`~stiffknots.engine.driver.TopologyChangedError`.
+
+Long runs can checkpoint every replica (``checkpoint_dir``) and be resumed (``resume=True``)
+with exactly the result of an uninterrupted run (:mod:`stiffknots.engine.driver`).
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from stiffknots.engine.driver import (
 from stiffknots.engine.schedules import Schedule
 from stiffknots.engine.state import MoveParams
 
-DEFAULT_MOVES = 20_000_000
+DEFAULT_MOVES = AnnealSettings.moves  # 30 M: relaxation + annealing (schedules.py)
 
 
 @dataclass
@@ -110,11 +113,19 @@ def _jsonable(x):
     raise TypeError(f"not JSON serialisable: {type(x)}")
 
 
-def _replica_job(coords, settings, seed, replica, knot_name):
-    """Worker: anneal one replica and verify its knot type."""
+def checkpoint_path(checkpoint_dir: str | Path, replica: int) -> Path:
+    """The checkpoint file of one replica inside ``checkpoint_dir``."""
+    return Path(checkpoint_dir) / f"replica_{replica}.ckpt.npz"
+
+
+def _replica_job(coords, settings, seed, replica, knot_name, checkpoint_dir=None,
+                 resume=False, checkpoint_seconds=None):
+    """Worker: anneal one replica (checkpointed if asked) and verify its knot type."""
     from stiffknots.knots.identify import verify_knot
 
-    res = run_replica(coords, settings, seed, replica)
+    ck = checkpoint_path(checkpoint_dir, replica) if checkpoint_dir is not None else None
+    res = run_replica(coords, settings, seed, replica, checkpoint=ck, resume=resume,
+                      checkpoint_every=10, checkpoint_seconds=checkpoint_seconds)
     ok, found = verify_knot(res.coords, knot_name)
     res.knot = found
     res.knot_verified = bool(ok)
@@ -134,6 +145,9 @@ def anneal(
     quench_fraction: float = 0.1,
     target_epsilon: float | None = None,
     on_replica_done: Callable[[ReplicaResult], None] | None = None,
+    checkpoint_dir: str | Path | None = None,
+    resume: bool = False,
+    checkpoint_seconds: float | None = 60.0,
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -150,6 +164,14 @@ def anneal(
     quench_fraction : fraction of the moves spent in the final T = 0 quench.
     target_epsilon : if given, each replica records the wall time at which ε first fell below.
     on_replica_done : callback called in the parent process as each replica finishes.
+    checkpoint_dir : if given, every replica writes ``replica_K.ckpt.npz`` there every 10
+        chunks (of 210), every ``checkpoint_seconds`` seconds and when it ends (positions,
+        generator state, counters, energy, chunk index, traces, best chain, settings, seed,
+        version).
+    resume : continue every replica from its checkpoint in ``checkpoint_dir`` when there is
+        one (the call must repeat the same knot, beads, moves, seed and settings; a mismatch
+        raises ValueError); the result is exactly that of an uninterrupted run.
+    checkpoint_seconds : wall-clock seconds between checkpoints (None: chunks only).
 
     Returns
     -------
@@ -170,6 +192,8 @@ def anneal(
     k = get_knot(knot)
     if replicas < 1:
         raise ValueError(f"replicas must be ≥ 1, got {replicas}")
+    if resume and checkpoint_dir is None:
+        raise ValueError("resume=True needs checkpoint_dir (where the checkpoints are)")
     settings = AnnealSettings(moves=int(moves), schedule=schedule or Schedule(),
                               params=params or MoveParams(), quench_fraction=quench_fraction,
                               target_epsilon=target_epsilon)
@@ -185,7 +209,8 @@ def anneal(
     if nw == 1:
         try:
             for r, s in enumerate(seeds):
-                res = _replica_job(coords, settings, s, r, k.name)
+                res = _replica_job(coords, settings, s, r, k.name, checkpoint_dir, resume,
+                                   checkpoint_seconds)
                 results.append(res)
                 if on_replica_done:
                     on_replica_done(res)
@@ -194,7 +219,8 @@ def anneal(
     else:
         ctx = mp.get_context("spawn")
         ex = ProcessPoolExecutor(max_workers=nw, mp_context=ctx)
-        futs = [ex.submit(_replica_job, coords, settings, s, r, k.name)
+        futs = [ex.submit(_replica_job, coords, settings, s, r, k.name, checkpoint_dir, resume,
+                          checkpoint_seconds)
                 for r, s in enumerate(seeds)]
         try:
             for f in as_completed(futs):

@@ -3,6 +3,32 @@
 Every schedule maps the fraction s ∈ [0, 1] of the annealing moves done to a temperature
 (k_B T in units of C, bond length 1). A zero-temperature quench follows the schedule in the
 driver.
+
+Two stages
+----------
+With ``relax_fraction`` r > 0 a run has two stages, each ending with its own quench:
+
+1. *relaxation*: the first fraction r of the moves cools the starting chain geometrically from
+   ``t_relax`` to ``t_relax_end``. ``t_relax`` is low (the default 5e-5 gives a thermal
+   excess δε ≈ 1, persistence length 2·10⁴ ≫ N): the chain keeps the topology-level shape of
+   its braid embedding and only relaxes. For the n = i knots the closed minimal braid *is* the
+   circular braid that the paper proves to be the ground state (§VI C), so this stage is what
+   finds it: the 3_1 reaches ε ≤ 79.1 in ≈ 8 CPU-seconds this way, against ≳ 19 s after a
+   hot start (bench/RESULTS.md); it also finds the 4_1's 4-fold cage (ε ≤ 129.6) in < 1 s.
+2. *annealing*: the rest of the moves anneal from ``t_start`` (hot) down to ``t_end`` with the
+   power law (the paper's method) or geometrically, which explores other shapes (the 4-fold
+   cage, the "80", metastable states).
+
+The driver keeps the lower-energy of the two quenched chains. r = 0 is the plain annealing of
+the paper.
+
+Parallel tempering
+------------------
+``kind = "tempering"`` replaces annealing by replica exchange
+(:mod:`stiffknots.engine.tempering`): ``n_temps`` chains at the fixed geometric ladder
+``t_end … t_start`` (:meth:`Schedule.ladder`); ``relax_fraction``, ``t_relax``,
+``t_relax_end`` and ``exponent`` are not used. It was measured slower than annealing on both
+benchmark knots (bench/RESULTS.md) and is not the default.
 """
 
 from __future__ import annotations
@@ -11,22 +37,42 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-SCHEDULES = ("power", "geometric")
+SCHEDULES = ("power", "geometric", "tempering")
 
 
 @dataclass(frozen=True)
 class Schedule:
-    """Cooling from ``t_start`` to ``t_end``.
+    """Cooling from ``t_start`` to ``t_end`` (paper §VII), optionally after a relaxation stage.
 
     ``power`` (the paper's form, §VII):  T(s) = t_start · (1 + s·c)^(−a), with
     c = (t_start/t_end)^(1/a) − 1 so that T(1) = t_end; ``a`` is the power-law exponent.
     ``geometric``:  T(s) = t_start · (t_end/t_start)^s.
+    ``tempering``: replica exchange on the ladder :meth:`ladder` (see the module docstring).
+
+    Attributes
+    ----------
+    relax_fraction : fraction of the moves spent first relaxing the starting chain
+        (geometric cooling ``t_relax`` → ``t_relax_end``, then a quench); 0 disables the stage
+        and leaves the paper's plain annealing.
+    t_relax, t_relax_end : first and last temperature of the relaxation stage.
+    n_temps : number of temperatures of the tempering ladder (``tempering`` only).
+
+    The defaults were chosen by measurement (bench/RESULTS.md): the annealing stage is the
+    paper's power law 3e-2 → 1e-6 with exponent 2 (a later end, 1e-7, shortens its hot part
+    and ends 6_2 at ε ≈ 163 instead of 153); the relaxation stage takes 0.4 of the 30 M
+    default moves (12 M: 8/8 seeds of 3_1 reach ε ≤ 79.1; 10 M: 5/8) and cools 5e-5 → 1e-7
+    (starting at 3e-5 or 7e-5 misses the target in 1 of 8 seeds; ending at 3e-7 or 3e-8 is
+    slower or misses it).
     """
 
     kind: str = "power"
     t_start: float = 3e-2
     t_end: float = 1e-6
     exponent: float = 2.0
+    relax_fraction: float = 0.4
+    t_relax: float = 5e-5
+    t_relax_end: float = 1e-7
+    n_temps: int = 6
 
     def validate(self) -> None:
         if self.kind not in SCHEDULES:
@@ -37,13 +83,38 @@ class Schedule:
             )
         if self.exponent <= 0:
             raise ValueError(f"the power-law exponent must be > 0, got {self.exponent}")
+        if not 0 <= self.relax_fraction < 1:
+            raise ValueError(f"relax_fraction must be in [0, 1), got {self.relax_fraction}")
+        if self.relax_fraction > 0 and self.kind != "tempering" and not (
+                self.t_relax > self.t_relax_end > 0):
+            raise ValueError(
+                f"need t_relax > t_relax_end > 0, got {self.t_relax}, {self.t_relax_end}")
+        if self.kind == "tempering" and self.n_temps < 2:
+            raise ValueError(f"tempering needs n_temps ≥ 2, got {self.n_temps}")
+
+    @property
+    def stages(self) -> tuple[str, ...]:
+        """The stages of an annealing run, in order: ``relax`` (if any), then ``anneal``."""
+        if self.kind == "tempering":
+            return ("tempering",)
+        return ("relax", "anneal") if self.relax_fraction > 0 else ("anneal",)
 
     def temperature(self, s: float | np.ndarray) -> float | np.ndarray:
+        """Temperature of the annealing stage at the fraction ``s`` of its moves."""
         s = np.clip(s, 0.0, 1.0)
         if self.kind == "geometric":
             return self.t_start * (self.t_end / self.t_start) ** s
         c = (self.t_start / self.t_end) ** (1.0 / self.exponent) - 1.0
         return self.t_start * (1.0 + s * c) ** (-self.exponent)
+
+    def relax_temperature(self, s: float | np.ndarray) -> float | np.ndarray:
+        """Temperature of the relaxation stage: geometric from ``t_relax`` to ``t_relax_end``."""
+        s = np.clip(s, 0.0, 1.0)
+        return self.t_relax * (self.t_relax_end / self.t_relax) ** s
+
+    def ladder(self) -> np.ndarray:
+        """The tempering ladder: ``n_temps`` temperatures, geometric, coldest first."""
+        return np.geomspace(self.t_end, self.t_start, self.n_temps)
 
     def as_dict(self) -> dict:
         return asdict(self)

@@ -44,10 +44,10 @@ class MoveParams:
 
     delta: float = float(np.pi / 100)
     p_single: float = 0.5
-    m_max: int = 40
+    m_max: int = 75
     phi_max: float = 0.6
     l_cap: float = 0.5
-    l_min: float = 0.5
+    l_min: float = 0.03
     exclusion: str = "bead"
     d: float = float(1 / np.sqrt(2))
     w: float = float(1 / np.sqrt(2))
