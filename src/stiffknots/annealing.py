@@ -12,10 +12,8 @@ with exactly the result of an uninterrupted run (:mod:`stiffknots.engine.driver`
 from __future__ import annotations
 
 import json
-import multiprocessing as mp
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,6 +28,7 @@ from stiffknots.engine.driver import (
     replica_seeds,
     run_replica,
 )
+from stiffknots.engine.pool import BestFirst, run_jobs
 from stiffknots.engine.schedules import Schedule
 from stiffknots.engine.state import MoveParams
 
@@ -37,7 +36,7 @@ DEFAULT_MOVES = AnnealSettings.moves  # 30 M: relaxation + annealing (schedules.
 
 
 @dataclass
-class AnnealResult:
+class AnnealResult(BestFirst):
     """Replicas of one knot, best first. ``interrupted`` is True when Ctrl-C stopped the run
     (finished replicas are kept)."""
 
@@ -50,12 +49,6 @@ class AnnealResult:
     interrupted: bool = False
     version: str = __version__
     bounds: dict = field(default_factory=dict)
-
-    @property
-    def best(self) -> ReplicaResult:
-        if not self.replicas:
-            raise RuntimeError("no replica finished")
-        return self.replicas[0]
 
     @property
     def epsilon(self) -> float:
@@ -203,37 +196,12 @@ def anneal(
     coords = embed_braid(word, n_strands=k.braid_strands if word else None, n_beads=beads)
     seeds = replica_seeds(seed, replicas)
     nw = workers or default_workers(replicas)
-    results: list[ReplicaResult] = []
-    interrupted = False
     t0 = time.perf_counter()
-    if nw == 1:
-        try:
-            for r, s in enumerate(seeds):
-                res = _replica_job(coords, settings, s, r, k.name, checkpoint_dir, resume,
-                                   checkpoint_seconds)
-                results.append(res)
-                if on_replica_done:
-                    on_replica_done(res)
-        except KeyboardInterrupt:
-            interrupted = True
-    else:
-        ctx = mp.get_context("spawn")
-        ex = ProcessPoolExecutor(max_workers=nw, mp_context=ctx)
-        futs = [ex.submit(_replica_job, coords, settings, s, r, k.name, checkpoint_dir, resume,
-                          checkpoint_seconds)
-                for r, s in enumerate(seeds)]
-        try:
-            for f in as_completed(futs):
-                res = f.result()
-                results.append(res)
-                if on_replica_done:
-                    on_replica_done(res)
-            ex.shutdown(wait=True)
-        except KeyboardInterrupt:
-            interrupted = True
-            for f in futs:
-                f.cancel()
-            ex.shutdown(wait=False, cancel_futures=True)
+    results, interrupted = run_jobs(
+        _replica_job,
+        [(coords, settings, s, r, k.name, checkpoint_dir, resume, checkpoint_seconds)
+         for r, s in enumerate(seeds)],
+        nw, on_replica_done)
     results.sort(key=lambda r: r.epsilon)
     bad = [r for r in results if not r.knot_verified]
     if bad:
