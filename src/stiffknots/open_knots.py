@@ -165,14 +165,8 @@ class OpenResult(BestFirst):
             "tension": self.tension if self.replicas else None,
             "shape": shape["label"],
             "shape_features": shape["features"],
-            "knot_verified": all(r.knot_verified for r in self.replicas),
             "bounds": self.bounds,
-            "settings": self.settings,
-            "wall_time": self.wall_time,
-            "interrupted": self.interrupted,
-            "version": self.version,
-            "replicas": [r.summary() for r in self.replicas],
-        }
+        } | self.provenance()
 
     def save(self, out: str | Path) -> dict[str, Path]:
         """Write ``result.json`` and the best chain as ``best.xyz`` (open chain)."""

@@ -188,13 +188,7 @@ class TightResult(BestFirst):
             "lower_bound": self.bounds.get("lower"),
             "upper_bound": self.bounds.get("upper"),
             "bounds": self.bounds,
-            "knot_verified": all(r.knot_verified for r in self.replicas),
-            "settings": self.settings,
-            "wall_time": self.wall_time,
-            "interrupted": self.interrupted,
-            "version": self.version,
-            "replicas": [r.summary() for r in self.replicas],
-        }
+        } | self.provenance()
 
     def save(self, out: str | Path) -> dict[str, Path]:
         from stiffknots.chain import Chain, save
@@ -207,7 +201,6 @@ class TightResult(BestFirst):
                 "length_over_R": self.best.length_over_R, "version": self.version}
         save(Chain(self.best.coords, closed=True, meta=meta), out / "best.xyz")
         return {"result": out / "result.json", "best_xyz": out / "best.xyz"}
-
 
 
 def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, replicas: int = 2,

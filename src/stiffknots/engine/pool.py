@@ -60,3 +60,15 @@ class BestFirst:
         if not self.replicas:
             raise RuntimeError("no replica finished")
         return self.replicas[0]
+
+    def provenance(self) -> dict:
+        """What every replica-set result reports besides its physics: verification, settings,
+        timing and the package version (reproducibility), and each replica's summary."""
+        return {
+            "knot_verified": all(r.knot_verified for r in self.replicas),
+            "settings": self.settings,
+            "wall_time": self.wall_time,
+            "interrupted": self.interrupted,
+            "version": self.version,
+            "replicas": [r.summary() for r in self.replicas],
+        }
