@@ -94,7 +94,7 @@ def _tight_job(coords, params, moves, powers, seed, replica, knot_name):
     """Worker: the continuation in p (see the module docstring), then the ratchet quench."""
     from dataclasses import replace
 
-    from stiffknots.engine.kernel import min_nonadjacent_segment_distance
+    from stiffknots.engine.kernel import min_nonadjacent_segment_distance, turning_cosines
     from stiffknots.engine.schedules import Schedule
     from stiffknots.knots.identify import verify_knot
 
@@ -112,8 +112,7 @@ def _tight_job(coords, params, moves, powers, seed, replica, knot_name):
             prm = replace(params, energy="bending")
         else:
             # scale: the 90th percentile of the turning angles, so energies are O(1)
-            th90 = float(np.percentile(ChainState(pos, replace(params, energy="bending"))
-                                       .turning_angles(), 90))
+            th90 = float(np.percentile(np.arccos(np.clip(turning_cosines(pos), -1, 1)), 90))
             prm = replace(params, energy="power", power=int(p),
                           energy_scale=float(1 - np.cos(max(th90, 1e-3))))
         state = ChainState(pos, prm, seed=seed + 7919 * k)

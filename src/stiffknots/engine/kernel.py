@@ -283,6 +283,27 @@ def uniforms(rng, n):
     return out
 
 
+@njit(cache=True, inline="always")
+def _segment_blocked(nax, nay, naz, nbx, nby, nbz, oax, oay, oaz, obx, oby, obz,
+                     mx, my, mz, vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, lim_mid2, w2, lmove):
+    """Does a moved segment (new ends na–nb, old ends oa–ob, new midpoint m) clash with the
+    fixed segment v–w (midpoint mv)? True if the new distance is below the tube diameter, or
+    if d_before + d_after ≤ L (the strand-passage guard of the module docstring)."""
+    ddx = mvx - mx
+    ddy = mvy - my
+    ddz = mvz - mz
+    if ddx * ddx + ddy * ddy + ddz * ddz > lim_mid2:
+        return False  # too far apart for either test to fail
+    dn2 = seg_dist2(nax, nay, naz, nbx, nby, nbz, vx, vy, vz, wx, wy, wz)
+    if dn2 < w2:
+        return True
+    if dn2 <= lmove * lmove:
+        do2 = seg_dist2(oax, oay, oaz, obx, oby, obz, vx, vy, vz, wx, wy, wz)
+        if math.sqrt(do2) + math.sqrt(dn2) <= lmove:
+            return True
+    return False
+
+
 @njit(cache=True)
 def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, newpos, cnt,
               rng):
@@ -569,40 +590,21 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
                             mvy = 0.5 * (vy + wy)
                             mvz = 0.5 * (vz + wz)
                             # segment A = (b-1, b) against fixed segment v (skip if bonded)
-                            if v1 != sa and v != b:
-                                ddx = mvx - amx
-                                ddy = mvy - amy
-                                ddz = mvz - amz
-                                if ddx * ddx + ddy * ddy + ddz * ddz <= lim_mid2:
-                                    dn2 = seg_dist2(ppx, ppy, ppz, px, py, pz,
-                                                    vx, vy, vz, wx, wy, wz)
-                                    if dn2 < w2:
-                                        ok = False
-                                        break
-                                    if dn2 <= lmove * lmove:
-                                        do2 = seg_dist2(opx, opy, opz,
-                                                        pos[b, 0], pos[b, 1], pos[b, 2],
-                                                        vx, vy, vz, wx, wy, wz)
-                                        if math.sqrt(do2) + math.sqrt(dn2) <= lmove:
-                                            ok = False
-                                            break
+                            if v1 != sa and v != b and _segment_blocked(
+                                    ppx, ppy, ppz, px, py, pz,
+                                    opx, opy, opz, pos[b, 0], pos[b, 1], pos[b, 2],
+                                    amx, amy, amz, vx, vy, vz, wx, wy, wz,
+                                    mvx, mvy, mvz, lim_mid2, w2, lmove):
+                                ok = False
+                                break
                             # segment B = (b, k) for the last moved bead
-                            if last and v != k and v1 != b:
-                                ddx = mvx - bmx
-                                ddy = mvy - bmy
-                                ddz = mvz - bmz
-                                if ddx * ddx + ddy * ddy + ddz * ddz <= lim_mid2:
-                                    dn2 = seg_dist2(px, py, pz, kx, ky, kz,
-                                                    vx, vy, vz, wx, wy, wz)
-                                    if dn2 < w2:
-                                        ok = False
-                                        break
-                                    if dn2 <= lmove * lmove:
-                                        do2 = seg_dist2(pos[b, 0], pos[b, 1], pos[b, 2],
-                                                        kx, ky, kz, vx, vy, vz, wx, wy, wz)
-                                        if math.sqrt(do2) + math.sqrt(dn2) <= lmove:
-                                            ok = False
-                                            break
+                            if last and v != k and v1 != b and _segment_blocked(
+                                    px, py, pz, kx, ky, kz,
+                                    pos[b, 0], pos[b, 1], pos[b, 2], kx, ky, kz,
+                                    bmx, bmy, bmz, vx, vy, vz, wx, wy, wz,
+                                    mvx, mvy, mvz, lim_mid2, w2, lmove):
+                                ok = False
+                                break
                             v = nxt[v]
         if not ok:
             continue
