@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -112,7 +112,7 @@ def checkpoint_path(checkpoint_dir: str | Path, replica: int) -> Path:
 
 
 def _replica_job(coords, settings, seed, replica, knot_name, checkpoint_dir=None,
-                 resume=False, checkpoint_seconds=None):
+                 resume=False, checkpoint_seconds=None, start="braid"):
     """Worker: anneal one replica (checkpointed if asked) and verify its knot type."""
     from stiffknots.knots.identify import verify_knot
 
@@ -122,6 +122,7 @@ def _replica_job(coords, settings, seed, replica, knot_name, checkpoint_dir=None
     ok, found = verify_knot(res.coords, knot_name)
     res.knot = found
     res.knot_verified = bool(ok)
+    res.start = start
     return res
 
 
@@ -141,6 +142,7 @@ def anneal(
     checkpoint_dir: str | Path | None = None,
     resume: bool = False,
     checkpoint_seconds: float | None = 60.0,
+    start: str | Sequence[str] = "all",
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -165,6 +167,11 @@ def anneal(
         one (the call must repeat the same knot, beads, moves, seed and settings; a mismatch
         raises ValueError); the result is exactly that of an uninterrupted run.
     checkpoint_seconds : wall-clock seconds between checkpoints (None: chunks only).
+    start : starting embedding: ``'braid'`` (closure of KnotInfo's braid word), ``'cage'``
+        (the 4-fold cage of a two-box rational knot [ab], §VII; see
+        :mod:`stiffknots.knots.starts`), ``'all'`` (the default: every start that exists for
+        the knot, shared round-robin among the replicas), or one start per replica (a
+        sequence of ``replicas`` names). Recorded in the settings and in every replica.
 
     Returns
     -------
@@ -179,7 +186,7 @@ def anneal(
         If any replica ends with a different knot type (never expected; see the kernel docs).
     """
     from stiffknots.knots.catalogue import get_knot
-    from stiffknots.knots.embedding import embed_braid
+    from stiffknots.knots.starts import resolve_starts, start_chain
     from stiffknots.theory.bounds import closed_bounds
 
     k = get_knot(knot)
@@ -192,15 +199,15 @@ def anneal(
                               target_epsilon=target_epsilon)
     settings.validate()
     settings.params.validate(beads)
-    word = k.braid_word or ()
-    coords = embed_braid(word, n_strands=k.braid_strands if word else None, n_beads=beads)
+    per_replica = resolve_starts(k, start, replicas, beads)
+    chains = {st: start_chain(k, st, beads) for st in dict.fromkeys(per_replica)}
     seeds = replica_seeds(seed, replicas)
     nw = workers or default_workers(replicas)
     t0 = time.perf_counter()
     results, interrupted = run_jobs(
         _replica_job,
-        [(coords, settings, s, r, k.name, checkpoint_dir, resume, checkpoint_seconds)
-         for r, s in enumerate(seeds)],
+        [(chains[per_replica[r]], settings, s, r, k.name, checkpoint_dir, resume,
+          checkpoint_seconds, per_replica[r]) for r, s in enumerate(seeds)],
         nw, on_replica_done)
     results.sort(key=lambda r: r.epsilon)
     bad = [r for r in results if not r.knot_verified]
@@ -212,6 +219,8 @@ def anneal(
         )
     b = closed_bounds(k.bridge_number, k.braid_index)
     bounds = {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
-    return AnnealResult(knot=k.name, beads=beads, seed=seed, settings=settings.as_dict(),
+    return AnnealResult(knot=k.name, beads=beads, seed=seed,
+                        settings={**settings.as_dict(),
+                                  "start": per_replica},
                         replicas=results, wall_time=time.perf_counter() - t0,
                         interrupted=interrupted, bounds=bounds)

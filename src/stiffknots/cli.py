@@ -225,6 +225,10 @@ def anneal(
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue from the checkpoints in --checkpoint (same arguments).")
     ] = False,
+    start: Annotated[str, typer.Option(
+        help="Starting embedding: all (every start that exists for the knot, shared among the "
+             "replicas), braid (closure of KnotInfo's braid word) or cage (4-fold cage of a "
+             "two-box rational knot [ab]: 4_1, 5_2, 6_1, ...).")] = "all",
     out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
     json_: JsonOpt = False,
 ) -> None:
@@ -247,6 +251,10 @@ def anneal(
         raise UserError(f"--moves must be ≥ 1000, got {moves}")
     if resume and checkpoint is None:
         raise UserError("--resume needs --checkpoint DIR (the folder of the checkpoints)")
+    from stiffknots.knots.starts import STARTS
+
+    if start != "all" and start not in STARTS:
+        raise UserError(f"--start must be all or one of {', '.join(STARTS)}, got {start!r}")
     given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
     sch = replace(Schedule(), kind=schedule, **{k: v for k, v in given.items() if v is not None})
     params = replace(MoveParams(), exclusion=exclusion, delta=delta,
@@ -257,7 +265,7 @@ def anneal(
         task = prog.add_task("anneal", total=replicas, knot=name)
         res = run(name, beads=beads, moves=moves, replicas=replicas, seed=seed, schedule=sch,
                   params=params, on_replica_done=lambda r: prog.advance(task),
-                  checkpoint_dir=checkpoint, resume=resume)
+                  checkpoint_dir=checkpoint, resume=resume, start=start)
     if not res.replicas:
         err.print("interrupted before any replica finished"
                   + (f"; resume with --checkpoint {checkpoint} --resume" if checkpoint else ""))
@@ -281,10 +289,11 @@ def anneal(
         _dump(d)
         return
     t = Table(title=f"{res.knot}, N = {beads}, {moves:,} moves/replica, {exclusion} exclusion")
-    for col in ("replica", "seed", "ε", "knot", "min seg dist", "acc single", "acc multi", "s"):
+    for col in ("replica", "seed", "start", "ε", "knot", "min seg dist", "acc single",
+                "acc multi", "s"):
         t.add_column(col, justify="right")
     for r in res.replicas:
-        t.add_row(str(r.replica), str(r.seed), f"{r.epsilon:.4f}",
+        t.add_row(str(r.replica), str(r.seed), str(r.start), f"{r.epsilon:.4f}",
                   r.knot + (" ✓" if r.knot_verified else " ✗"),
                   f"{r.min_segment_distance:.3f}", f"{r.acceptance['single']['rate']:.3f}",
                   f"{r.acceptance['multi']['rate']:.3f}", f"{r.wall_time:.1f}")
@@ -362,11 +371,9 @@ def main() -> None:
 
     try:
         app(standalone_mode=False)
-    except (UserError, UnknownKnotError) as e:
-        err.print(f"error: {e}", highlight=False, markup=False)
-        raise SystemExit(2) from None
-    except ValueError as e:  # EmbeddingError and parameter validation are ValueErrors
-        err.print(f"error: {e}", highlight=False, markup=False)
+    except (UserError, UnknownKnotError, ValueError) as e:
+        # ValueError: EmbeddingError and parameter validation; one line whatever the width
+        err.print(f"error: {e}", highlight=False, markup=False, soft_wrap=True)
         raise SystemExit(2) from None
     except typer.Abort:
         err.print("aborted")

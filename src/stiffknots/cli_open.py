@@ -172,6 +172,9 @@ def tightest(
     replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
     seed: Annotated[int, typer.Option(help="Seed.")] = 0,
     exclusion: Annotated[str, typer.Option(help="bead (d = 1/√2) or tube.")] = "bead",
+    start: Annotated[str, typer.Option(
+        help="Starting embedding: all (every start that exists for the knot), braid or cage "
+             "(two-box rational knots [ab]: 4_1, 5_2, ...).")] = "all",
     out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
     json_: JsonOpt = False,
 ) -> None:
@@ -185,12 +188,16 @@ def tightest(
         raise UserError(f"--max-curvature must be > 0, got {max_curvature}")
     if beads < 8 or replicas < 1:
         raise UserError("--beads must be ≥ 8 and --replicas ≥ 1")
+    from stiffknots.knots.starts import STARTS
+
+    if start != "all" and start not in STARTS:
+        raise UserError(f"--start must be all or one of {', '.join(STARTS)}, got {start!r}")
     with Progress(TextColumn("[bold]tightest {task.fields[knot]}"), BarColumn(),
                   TextColumn("{task.completed}/{task.total} replicas"), TimeElapsedColumn(),
                   console=err, transient=True, disable=json_) as prog:
         task = prog.add_task("tight", total=replicas, knot=name)
         res = run(name, beads, moves=moves, replicas=replicas, seed=seed, exclusion=exclusion,
-                  on_replica_done=lambda _r: prog.advance(task))
+                  on_replica_done=lambda _r: prog.advance(task), start=start)
     d = res.to_dict()
     d["max_curvature"] = max_curvature
     if max_curvature is not None:

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -82,6 +82,7 @@ class TightReplica:
     energy_incremental: float
     knot: str | None = None
     knot_verified: bool | None = None
+    start: str | None = None  # starting embedding of this replica
 
     def summary(self) -> dict:
         d = asdict(self)
@@ -90,7 +91,7 @@ class TightReplica:
         return d
 
 
-def _tight_job(coords, params, moves, powers, seed, replica, knot_name):
+def _tight_job(coords, params, moves, powers, seed, replica, knot_name, start="braid"):
     """Worker: the continuation in p (see the module docstring), then the ratchet quench."""
     from dataclasses import replace
 
@@ -154,7 +155,7 @@ def _tight_job(coords, params, moves, powers, seed, replica, knot_name):
         wall_time=time.perf_counter() - t0, exclusion_margin=-state.violation(),
         min_segment_distance=float(min_nonadjacent_segment_distance(state.pos)),
         energy_recomputed=e_rec, energy_incremental=state.energy, knot=found,
-        knot_verified=bool(ok))
+        knot_verified=bool(ok), start=start)
 
 
 @dataclass
@@ -206,7 +207,8 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
              seed: int = 0, *, exclusion: str = "tube", d: float | None = None,
              w: float | None = 0.25, powers: tuple[int, ...] = DEFAULT_POWERS,
              workers: int | None = None,
-             on_replica_done: Callable[[TightReplica], None] | None = None) -> TightResult:
+             on_replica_done: Callable[[TightReplica], None] | None = None,
+             start: str | Sequence[str] = "all") -> TightResult:
     """Minimal length L†/R of ``knot`` under the curvature limit 1/R (paper §IX.D).
 
     Parameters
@@ -220,6 +222,9 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
         d = 1/√2, is available and gives longer knots at a given N).
     powers : the continuation p = 1 (the bending energy, annealed as in §VII), 2, 4, …, 64
         of the minimax energy Σ((1 − cos θ)/s)^p.
+    start : starting embedding(s), as for :func:`stiffknots.anneal`: ``'all'`` (default: every
+        start that exists for the knot, round-robin over the replicas), ``'braid'``, ``'cage'``
+        (two-box rational knots; see :mod:`stiffknots.knots.starts`) or one per replica.
 
     Returns
     -------
@@ -227,7 +232,7 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
     2π min(7n/3, i).
     """
     from stiffknots.knots.catalogue import get_knot
-    from stiffknots.knots.embedding import embed_braid
+    from stiffknots.knots.starts import resolve_starts, start_chain
     from stiffknots.theory.bounds import restricted_curvature_bounds
 
     k = get_knot(knot)
@@ -244,13 +249,13 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
         kw["w"] = w
     params = MoveParams(**kw)
     params.validate(beads)
-    word = k.braid_word or ()
-    coords = embed_braid(word, n_strands=k.braid_strands if word else None, n_beads=beads)
+    per_replica = resolve_starts(k, start, replicas, beads)
+    chains = {st: start_chain(k, st, beads) for st in dict.fromkeys(per_replica)}
     seeds = replica_seeds(seed, replicas)
     nw = workers or default_workers(replicas)
     t0 = time.perf_counter()
-    args = [(coords, params, int(moves), tuple(int(p) for p in powers), s, r, k.name)
-            for r, s in enumerate(seeds)]
+    args = [(chains[per_replica[r]], params, int(moves), tuple(int(p) for p in powers), s, r,
+             k.name, per_replica[r]) for r, s in enumerate(seeds)]
     results, interrupted = run_jobs(_tight_job, args, nw, on_replica_done)
     results.sort(key=lambda r: r.length_over_R)
     bad = [r for r in results if not r.knot_verified]
@@ -260,7 +265,8 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
             f"; this is a bug, please report it with seed {seed}")
     b = restricted_curvature_bounds(k.bridge_number, k.braid_index, R=1.0)
     bounds = {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
-    settings = {"moves": int(moves), "powers": list(powers), "params": params.as_dict()}
+    settings = {"moves": int(moves), "powers": list(powers), "params": params.as_dict(),
+                "start": per_replica}
     return TightResult(knot=k.name, beads=beads, seed=seed, settings=settings,
                        replicas=results, bounds=bounds, wall_time=time.perf_counter() - t0,
                        interrupted=interrupted)

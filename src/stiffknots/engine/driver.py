@@ -140,6 +140,7 @@ class ReplicaResult:
     best_stage: str | None = None
     tempering: dict | None = None
     resumed_from_step: int | None = None
+    start: str | None = None  # starting embedding ('braid', 'cage', …), set by the caller
 
     def summary(self) -> dict:
         d = asdict(self)

@@ -62,6 +62,7 @@ _FIELDS = (
     "alternating",
     "alexander_polynomial",
     "jones_polynomial",
+    "conway_notation",
 )
 
 #: Friendly names (keys: lower case, without spaces, '-' or '_').
@@ -140,6 +141,9 @@ class Knot:
         bounds ``lo`` = lower bound of the bridge number (since :math:`i \\ge n`) and ``hi`` =
         number of strings of the KnotInfo braid word. When ``lo == hi`` the braid index is in
         fact determined, but :attr:`braid_index` stays ``None`` (it reports KnotInfo's value).
+    conway_notation : str or None
+        KnotInfo's Conway notation (e.g. ``'[32]'`` for 5_2); two-box rational knots ``[ab]``
+        are the paper's conjectured 4-fold-cage family (see :mod:`stiffknots.knots.cage_embedding`).
     raw : dict
         KnotInfo text of the parsed fields (not compared, not shown in ``repr``).
     """
@@ -157,6 +161,7 @@ class Knot:
     jones_polynomial: str | None = None
     bridge_number_range: tuple[int, int] | None = None
     braid_index_range: tuple[int, int] | None = None
+    conway_notation: str | None = None
     raw: dict[str, str] = field(default_factory=dict, compare=False, repr=False)
 
     @property
@@ -382,6 +387,7 @@ def _knot_from_row(row: dict[str, Any]) -> Knot | None:
         jones_polynomial=raw["jones_polynomial"] or None,
         bridge_number_range=bridge_range,
         braid_index_range=braid_range,
+        conway_notation=raw["conway_notation"] or None,
         raw=raw,
     )
 

@@ -64,13 +64,14 @@ def _anneal_model(name, model, b, seed):
     from stiffknots.engine.state import MoveParams
 
     params = MoveParams(exclusion=model)
-    res = anneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed, params=params)
+    res = anneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed, params=params,
+                 start="all")
     d = params.w if model == "tube" else params.d
     items = []
     for r in res.replicas:
         shape = classify(r.coords, d=d)
         items.append({"coords": r.coords, "epsilon": r.epsilon, "shape": shape,
-                      "meta": {"replica": r.replica, "seed": r.seed,
+                      "meta": {"replica": r.replica, "seed": r.seed, "start": r.start,
                                "min_segment_distance": r.min_segment_distance,
                                "knot": r.knot, "knot_verified": r.knot_verified}})
     groups = group_states(items)
@@ -85,6 +86,11 @@ def _state_dict(g, items) -> dict:
     d["epsilon"] = d["eps_min"]
     d["shape"] = d["label"]
     d["seed"] = rep["meta"]["seed"]
+    found_from: dict[str, int] = {}
+    for m in g.members:
+        st = items[m]["meta"]["start"]
+        found_from[st] = found_from.get(st, 0) + 1
+    d["found_from"] = found_from
     d["theory"] = _compare(d)
     return d
 
@@ -176,6 +182,10 @@ def _states_text(block: dict) -> str:
                      for s in block["metastable"]) or "—"
 
 
+def _found_from(st: dict) -> str:
+    return ", ".join(f"{k} start ×{v}" for k, v in st.get("found_from", {}).items()) or "—"
+
+
 def _write_report(out: Path, s: dict) -> None:
     from stiffknots.report.document import Document
 
@@ -184,7 +194,11 @@ def _write_report(out: Path, s: dict) -> None:
     doc.paragraph(f"stiffknots {s['version']}; command `{s['command']}`; {b['replicas']} "
                   f"replicas × {b['moves']:,} moves per knot and exclusion model, N = 150, "
                   f"seed {s['seed']}; wall time {s['wall_time']:.0f} s. Units: bond length 1, "
-                  "C = 1; ε = E_d·N/C. Every chain's knot type is verified (HOMFLY-PT).")
+                  "C = 1; ε = E_d·N/C. Every chain's knot type is verified (HOMFLY-PT). "
+                  "The replicas of a knot are shared round-robin among the starting embeddings "
+                  "that exist for it: the closure of KnotInfo's braid word (every knot) and the "
+                  "4-fold cage of a two-box rational knot [ab] (4_1, 5_2); the annealing "
+                  "decides the final shape, each state says which starts reached it.")
     doc.heading("Ground and metastable states", 2)
     rows = []
     for name, k in s["knots"].items():
@@ -226,7 +240,7 @@ def _write_report(out: Path, s: dict) -> None:
             for st in [blk["ground"]] + blk["metastable"]:
                 kind = "ground state" if st is blk["ground"] else "metastable"
                 doc.image(st["picture"], f"{kind}: {st['name']}, ε = {st['eps_min']:.3f}, "
-                          f"found {st['count']}×, min segment distance "
+                          f"found {st['count']}× (from {_found_from(st)}), min segment distance "
                           f"{st['min_segment_distance']:.3f}; {st['reason']}", width=360)
             doc.image(blk["annealing_curves"], "annealing curves (ε and T against moves)",
                       width=480)

@@ -1,0 +1,94 @@
+"""Starting chains for the annealing: which embedding the Monte Carlo search starts from.
+
+``braid`` (the default) is the closure of KnotInfo's braid word
+(:func:`stiffknots.knots.embedding.embed_braid`); ``cage`` is the 4-fold cage of a two-box
+rational knot (:func:`stiffknots.knots.cage_embedding.embed_cage`). The annealing decides the
+final shape and energy; the start only chooses the basin it is searched from.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["STARTS", "available_starts", "resolve_starts", "split_replicas", "start_chain"]
+
+#: Names of the starting embeddings.
+STARTS = ("braid", "cage")
+
+
+def start_chain(knot, start: str = "braid", n_beads: int = 150) -> np.ndarray:
+    """Closed unit-bond chain of ``knot`` (a catalogue entry) built by the ``start`` method.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``start`` (the message lists :data:`STARTS`).
+    EmbeddingError
+        If that start does not exist for this knot or does not fit in ``n_beads`` beads.
+    """
+    if start == "braid":
+        from stiffknots.knots.embedding import embed_braid
+
+        word = knot.braid_word or ()
+        return embed_braid(word, n_strands=knot.braid_strands if word else None, n_beads=n_beads)
+    if start == "cage":
+        from stiffknots.knots.cage_embedding import embed_cage
+
+        return embed_cage(knot, n_beads)
+    raise ValueError(f"unknown start {start!r}; choose one of {', '.join(STARTS)}")
+
+
+def available_starts(knot, n_beads: int = 150) -> list[str]:
+    """The starts of :data:`STARTS` that exist for ``knot`` at ``n_beads`` beads (braid first).
+
+    A start is available when :func:`start_chain` builds it (an :class:`EmbeddingError` means
+    the knot is outside that start's family or does not fit).
+    """
+    from stiffknots.knots.embedding import EmbeddingError
+
+    out = []
+    for st in STARTS:
+        try:
+            start_chain(knot, st, n_beads)
+        except EmbeddingError:
+            continue
+        out.append(st)
+    return out
+
+
+def split_replicas(starts: list[str], replicas: int) -> list[str]:
+    """Assign ``replicas`` replicas to ``starts`` round-robin (replica r gets start r mod k)."""
+    if not starts:
+        raise ValueError("no start to assign replicas to")
+    return [starts[r % len(starts)] for r in range(replicas)]
+
+
+def resolve_starts(knot, start, replicas: int, n_beads: int = 150) -> list[str]:
+    """One start name per replica.
+
+    Parameters
+    ----------
+    knot : catalogue entry.
+    start : ``'all'`` (every available start, shared round-robin), one name of :data:`STARTS`
+        (every replica), or a sequence of ``replicas`` names.
+    replicas : number of replicas.
+    n_beads : number of beads (a start must fit in it to be available).
+
+    Raises
+    ------
+    ValueError
+        For an unknown name or a sequence of the wrong length.
+    """
+    if isinstance(start, str):
+        if start == "all":
+            return split_replicas(available_starts(knot, n_beads), replicas)
+        if start not in STARTS:
+            raise ValueError(f"unknown start {start!r}; choose all or one of {', '.join(STARTS)}")
+        return [start] * replicas
+    out = [str(s) for s in start]
+    if len(out) != replicas:
+        raise ValueError(f"start: {len(out)} starts given for {replicas} replicas")
+    bad = [s for s in out if s not in STARTS]
+    if bad:
+        raise ValueError(f"unknown start(s) {bad}; choose from {', '.join(STARTS)}")
+    return out
