@@ -226,9 +226,10 @@ def anneal(
         "--resume", help="Continue from the checkpoints in --checkpoint (same arguments).")
     ] = False,
     start: Annotated[str, typer.Option(
-        help="Starting embedding: all (every start that exists for the knot, shared among the "
-             "replicas), braid (closure of KnotInfo's braid word) or cage (4-fold cage of a "
-             "two-box rational knot [ab]: 4_1, 5_2, 6_1, ...).")] = "all",
+        help="Starting embedding: all (braid and cage where they exist, shared among the "
+             "replicas), braid (closure of KnotInfo's braid word), cage (4-fold cage of a "
+             "two-box rational knot [ab]: 4_1, 5_2, 6_1, ...) or eighty (an 8 plus a circle)."
+    )] = "all",
     out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
     json_: JsonOpt = False,
 ) -> None:

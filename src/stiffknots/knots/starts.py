@@ -1,19 +1,25 @@
 """Starting chains for the annealing: which embedding the Monte Carlo search starts from.
 
-``braid`` (the default) is the closure of KnotInfo's braid word
+``braid`` is the closure of KnotInfo's braid word
 (:func:`stiffknots.knots.embedding.embed_braid`); ``cage`` is the 4-fold cage of a two-box
-rational knot (:func:`stiffknots.knots.cage_embedding.embed_cage`). The annealing decides the
-final shape and energy; the start only chooses the basin it is searched from.
+rational knot (:func:`stiffknots.knots.cage_embedding.embed_cage`); ``eighty`` is an "80", a
+figure eight with a circle along one lobe (:func:`stiffknots.knots.eighty_embedding.embed_eighty`,
+found by a search over a parametrised family, slower to build). ``all`` means the
+:data:`ALL_STARTS` that exist for the knot. The annealing decides the final shape and energy;
+the start only chooses the basin it is searched from.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["STARTS", "available_starts", "resolve_starts", "split_replicas", "start_chain"]
+__all__ = ["ALL_STARTS", "STARTS", "available_starts", "resolve_starts", "split_replicas",
+           "start_chain"]
 
 #: Names of the starting embeddings.
-STARTS = ("braid", "cage")
+STARTS = ("braid", "cage", "eighty")
+#: The starts that ``start='all'`` draws from (``eighty`` is opt-in: its search is slower).
+ALL_STARTS = ("braid", "cage")
 
 
 def start_chain(knot, start: str = "braid", n_beads: int = 150) -> np.ndarray:
@@ -35,11 +41,15 @@ def start_chain(knot, start: str = "braid", n_beads: int = 150) -> np.ndarray:
         from stiffknots.knots.cage_embedding import embed_cage
 
         return embed_cage(knot, n_beads)
+    if start == "eighty":
+        from stiffknots.knots.eighty_embedding import embed_eighty
+
+        return embed_eighty(knot, n_beads)
     raise ValueError(f"unknown start {start!r}; choose one of {', '.join(STARTS)}")
 
 
-def available_starts(knot, n_beads: int = 150) -> list[str]:
-    """The starts of :data:`STARTS` that exist for ``knot`` at ``n_beads`` beads (braid first).
+def available_starts(knot, n_beads: int = 150, starts=ALL_STARTS) -> list[str]:
+    """The ``starts`` (default :data:`ALL_STARTS`) that exist for ``knot`` at ``n_beads`` beads.
 
     A start is available when :func:`start_chain` builds it (an :class:`EmbeddingError` means
     the knot is outside that start's family or does not fit).
@@ -47,7 +57,7 @@ def available_starts(knot, n_beads: int = 150) -> list[str]:
     from stiffknots.knots.embedding import EmbeddingError
 
     out = []
-    for st in STARTS:
+    for st in starts:
         try:
             start_chain(knot, st, n_beads)
         except EmbeddingError:

@@ -62,10 +62,13 @@ def _anneal_model(name, model, b, seed):
     from stiffknots.analysis import classify, group_states
     from stiffknots.annealing import anneal
     from stiffknots.engine.state import MoveParams
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.starts import STARTS, available_starts, split_replicas
 
     params = MoveParams(exclusion=model)
+    starts = split_replicas(available_starts(get_knot(name), starts=STARTS), b["replicas"])
     res = anneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed, params=params,
-                 start="all")
+                 start=starts)
     d = params.w if model == "tube" else params.d
     items = []
     for r in res.replicas:
@@ -196,9 +199,10 @@ def _write_report(out: Path, s: dict) -> None:
                   f"seed {s['seed']}; wall time {s['wall_time']:.0f} s. Units: bond length 1, "
                   "C = 1; ε = E_d·N/C. Every chain's knot type is verified (HOMFLY-PT). "
                   "The replicas of a knot are shared round-robin among the starting embeddings "
-                  "that exist for it: the closure of KnotInfo's braid word (every knot) and the "
-                  "4-fold cage of a two-box rational knot [ab] (4_1, 5_2); the annealing "
-                  "decides the final shape, each state says which starts reached it.")
+                  "that exist for it: the closure of KnotInfo's braid word (every knot), the "
+                  "4-fold cage of a two-box rational knot [ab] (4_1, 5_2) and an 80 (a figure "
+                  "eight with a circle along a lobe); the annealing decides the final shape, "
+                  "each state says which starts reached it.")
     doc.heading("Ground and metastable states", 2)
     rows = []
     for name, k in s["knots"].items():
