@@ -101,3 +101,10 @@ def test_paper_tiny_writes_report(tmp_path):
         assert (tmp_path / f).exists()
     html = (tmp_path / "report.html").read_text()
     assert "<table" in html and "4_1" in html
+
+
+def test_unknown_option_is_a_usage_error_not_a_traceback():
+    # typer vendors click; the usage-error path must not import a module that is absent
+    rc, out, err = run("anneal", "4_1", "--bogus")
+    assert rc == 2
+    assert "Traceback" not in err and "No such option" in err
