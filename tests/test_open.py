@@ -170,3 +170,28 @@ def test_cli_open_and_tightest_json(capsys):
         assert key in d
     assert d["lower_bound"] == pytest.approx(4 * np.pi)
     assert d["length_over_R"] >= d["lower_bound"] * 0.99
+
+
+def _zigzag_open_chain(n=11):
+    """Open chain: ends clamped on z, free beads on a planar zigzag (all bonds 1)."""
+    h = np.sqrt(0.75)
+    x = [(0.0, 0.0, 0.0), (0.0, 0.0, 1.0)]
+    for k in range(2, n - 1):
+        x.append((0.5 if k % 2 == 0 else 0.0, 0.0, 1.0 + (k - 1) * h))
+    top = x[-1][2]
+    assert x[-1][0] == 0.0
+    x.append((0.0, 0.0, top + 1.0))
+    return np.array(x)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_open_bead_rule_holds_for_the_last_bead(seed):
+    # bead N−1 starts no segment of an open chain, so the cell scan over segments must still
+    # check it as a bead: hot moves of a short chain press free beads against the top end
+    from stiffknots.engine.kernel import check_state
+
+    x = _zigzag_open_chain()
+    st = ChainState(x, MoveParams(exclusion="bead", m_max=6), seed=seed, closed=False)
+    for _ in range(50):
+        st.run(2_000, 3.0)
+        assert check_state(st.pos, 0, st.params.d, 0.0, True) <= 1e-12

@@ -390,4 +390,8 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    # ``python -m stiffknots.cli``: run the imported module's app, on which cli_open has
+    # registered ``open`` and ``tightest`` (this file's own copy, ``__main__``, has not)
+    from stiffknots.cli import main as _main
+
+    _main()

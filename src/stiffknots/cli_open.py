@@ -25,11 +25,19 @@ def _floats(text: str, what: str) -> list[float]:
 @app.command("open")
 def open_knot(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_1, 5_2 ...")],
-    excess_length: Annotated[str, typer.Option(
-        "--excess-length", help="Excess length(s) L_e in bond lengths, e.g. 40,60,80.")] = "80",
+    excess_length: Annotated[str | None, typer.Option(
+        "--excess-length", help="Excess length(s) L_e in bond lengths, e.g. 40,60,80 "
+        "(default 80). With --ensemble force: the starting L_e (one value).")] = None,
     force: Annotated[str | None, typer.Option(
-        help="Tension(s) F in C/b²: each is turned into the excess length it selects, "
-             "L_e = (ε_e C/F)^½, using ε_e measured at the first --excess-length.")] = None,
+        help="Tension(s) F in C/b². Fixed extension: each is turned into the excess length it "
+             "selects, L_e = (ε_e C/F)^½, using ε_e measured at the first --excess-length. "
+             "--ensemble force: the applied force(s).")] = None,
+    ensemble: Annotated[str, typer.Option(
+        help="extension: L_e fixed, tension measured (default); force: the ends slide along "
+             "z under the force F (energy E_d − F·Δz), L_e measured.")] = "extension",
+    beads: Annotated[int | None, typer.Option(
+        help="Beads N of the chain (--ensemble force only; default: the embedding with "
+             "⌈L_e/4⌉ beads added to each straight end).")] = None,
     moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
     replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
     seed: Annotated[int, typer.Option(help="Seed.")] = 0,
@@ -41,16 +49,27 @@ def open_knot(
 ) -> None:
     """Anneal an open knot with its ends clamped on the z axis (paper §VIII); measure μ, ε_e.
 
-    The ensemble is fixed extension: L_e is fixed, the tension is measured as μ = E/L_e and,
-    over several L_e, as −dE/dL_e. --json prints knot, tension, excess_length, eps_e, shape
-    of the last point, and every point.
+    Default ensemble: fixed extension — L_e is fixed, the tension is measured as μ = E/L_e and,
+    over several L_e, as −dE/dL_e. With --ensemble force the ends slide along z under the
+    force F and L_e is measured (at equilibrium μ = E/L_e = F). --json prints knot, tension,
+    excess_length, eps_e, shape of the last point (and force, with --ensemble force), and
+    every point.
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from stiffknots.engine.state import MoveParams
     from stiffknots.open_knots import anneal_open, excess_length_for_force
 
-    les = _floats(excess_length, "--excess-length")
+    if ensemble not in ("extension", "force"):
+        raise UserError(f"--ensemble must be extension or force, got {ensemble!r}")
+    if ensemble == "force":
+        _open_force(name, excess_length, force, beads, moves, replicas, seed, exclusion, w,
+                    m_max, out_dir, json_)
+        return
+    if beads is not None:
+        raise UserError("--beads applies to --ensemble force only (at fixed extension the "
+                        "embedding sets N)")
+    les = _floats(excess_length or "80", "--excess-length")
     if any(v != int(v) or v < 8 for v in les):
         raise UserError(f"--excess-length must be integers ≥ 8 (bond lengths), got {les}")
     forces = _floats(force, "--force") if force else []
@@ -127,6 +146,99 @@ def open_knot(
     out.print(t)
     if "fit_eps_e" in summary:
         out.print(f"fit μ L_e²/C = {summary['fit_eps_e']:.3f} (2π² = {2 * math.pi ** 2:.3f})")
+    if out_dir is not None:
+        out.print(f"results in {out_dir}/")
+
+
+def _open_force(name, excess_length, force, beads, moves, replicas, seed, exclusion, w, m_max,
+                out_dir, json_) -> None:
+    """``stiffknots open --ensemble force``: one fixed-force anneal per --force value."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from stiffknots.engine.state import MoveParams
+    from stiffknots.open_force import anneal_open_force
+
+    if not force:
+        raise UserError("--ensemble force needs --force F (in C/b²)")
+    forces = _floats(force, "--force")
+    if any(not (f > 0 and math.isfinite(f)) for f in forces):
+        raise UserError(f"--force must be > 0 (units C/b²), got {forces}")
+    le0 = None
+    if excess_length is not None:
+        les = _floats(excess_length, "--excess-length")
+        if len(les) != 1 or les[0] != int(les[0]) or les[0] < 8:
+            raise UserError("with --ensemble force, --excess-length is the starting L_e: one "
+                            f"integer ≥ 8, got {les}")
+        le0 = int(les[0])
+    if (beads is not None and beads < 8) or replicas < 1 or moves < 1000:
+        raise UserError("--beads must be ≥ 8, --replicas ≥ 1 and --moves ≥ 1000")
+    kw = {"exclusion": exclusion, "m_max": m_max}
+    if w is not None:
+        kw["w"] = w
+    params = MoveParams(**kw)
+    results = []
+    with Progress(TextColumn("[bold]open {task.fields[knot]} F = {task.fields[f]}"),
+                  BarColumn(), TextColumn("{task.completed}/{task.total} replicas"),
+                  TimeElapsedColumn(), console=err, transient=True, disable=json_) as prog:
+        task = prog.add_task("open", total=replicas, knot=name, f=forces[0])
+        for f in forces:
+            prog.reset(task, total=replicas)
+            prog.update(task, f=f)
+            results.append(anneal_open_force(
+                name, f, n_beads=beads, moves=moves, replicas=replicas, seed=seed,
+                excess_length=le0, params=params,
+                on_replica_done=lambda _r: prog.advance(task)))
+    keys = ("force", "tension", "force_balance", "excess_length", "energy", "eps_e", "shape",
+            "beads", "knot_verified", "wall_time")
+    points = []
+    for r in results:
+        d = r.to_dict()
+        p = {k: d[k] for k in keys}
+        p["min_segment_distance"] = r.best.min_segment_distance
+        p["shape_features"] = d["shape_features"]
+        points.append(p)
+    last = points[-1]
+    res0 = results[0]
+    summary = {
+        "knot": res0.knot, "ensemble": "force", "force": last["force"],
+        "tension": last["tension"], "force_balance": last["force_balance"],
+        "excess_length": last["excess_length"], "eps_e": last["eps_e"], "shape": last["shape"],
+        "bounds": res0.bounds, "points": points, "seed": seed, "moves": moves,
+        "replicas": replicas, "beads": res0.beads, "start_excess_length":
+            res0.settings["start_excess_length"], "params": params.as_dict(),
+        "version": res0.version,
+        "units": "bond length b = 1, C = 1: force and tension in C/b², eps_e = E·L_e/C",
+    }
+    if out_dir is not None:
+        import json
+
+        from stiffknots._json import json_default
+
+        out_dir = Path(out_dir)
+        files = {}
+        for r in results:
+            sub = out_dir / f"F_{r.force:g}"
+            r.save(sub)
+            files[f"F_{r.force:g}"] = str(sub)
+        (out_dir / "summary.json").write_text(json.dumps(summary, indent=2,
+                                                         default=json_default))
+        files["summary"] = str(out_dir / "summary.json")
+        summary["files"] = files
+    if json_:
+        _dump(summary)
+        return
+    from rich.table import Table
+
+    b = res0.bounds
+    t = Table(title=f"open {res0.knot} at fixed force: ε_e bounds [{_fmt(b['eps_e_lower'])}, "
+                    f"{_fmt(b['eps_e_upper'])}] (§VIII)")
+    for col in ("F", "L_e", "μ = E/L_e", "μ/F", "ε_e = E·L_e", "shape", "knot", "s"):
+        t.add_column(col, justify="right")
+    for p in points:
+        t.add_row(f"{p['force']:.4g}", f"{p['excess_length']:.2f}", f"{p['tension']:.5g}",
+                  f"{p['force_balance']:.3f}", f"{p['eps_e']:.3f}", p["shape"],
+                  "✓" if p["knot_verified"] else "✗", f"{p['wall_time']:.0f}")
+    out.print(t)
     if out_dir is not None:
         out.print(f"results in {out_dir}/")
 
