@@ -9,7 +9,8 @@ The top-level functions are imported lazily (numba compiles on first use, not on
 
 from stiffknots._version import __version__
 
-__all__ = ["__version__", "anneal", "anneal_open", "tension_scan", "tightest"]
+__all__ = ["__version__", "anneal", "anneal_open", "anneal_open_force", "tension_scan",
+           "tightest"]
 
 
 def __getattr__(name: str):
@@ -21,6 +22,10 @@ def __getattr__(name: str):
         from stiffknots import open_knots
 
         return getattr(open_knots, name)
+    if name == "anneal_open_force":
+        from stiffknots.open_force import anneal_open_force
+
+        return anneal_open_force
     if name == "tightest":
         from stiffknots.tightest import tightest
 

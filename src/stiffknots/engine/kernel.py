@@ -586,6 +586,15 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
                                     if ddx * ddx + ddy * ddy + ddz * ddz < d2:
                                         ok = False
                                         break
+                                # an open chain's last bead starts no segment: check it
+                                # with the last segment (its midpoint is within d + 1/2)
+                                if is_open and v1 == n - 1 and n - 1 - b >= 2:
+                                    ddx = pos[n - 1, 0] - px
+                                    ddy = pos[n - 1, 1] - py
+                                    ddz = pos[n - 1, 2] - pz
+                                    if ddx * ddx + ddy * ddy + ddz * ddz < d2:
+                                        ok = False
+                                        break
                             mvx = 0.5 * (vx + wx)
                             mvy = 0.5 * (vy + wy)
                             mvz = 0.5 * (vz + wz)
