@@ -115,6 +115,36 @@ def _hermite(p0, t0, p1, t1, n):
     return h00 * p0 + h10 * t0 + h01 * p1 + h11 * t1
 
 
+def _cycles(pieces: list[np.ndarray]) -> list[np.ndarray]:
+    """Chain open polyline pieces into closed polylines through their shared end points
+    (every end point must be shared by exactly two piece ends)."""
+
+    def key(p):
+        return tuple(np.round(p, 9))
+
+    ends: dict = {}
+    for i, pc in enumerate(pieces):
+        for e, p in ((0, pc[0]), (1, pc[-1])):
+            ends.setdefault(key(p), []).append((i, e))
+    if any(len(v) != 2 for v in ends.values()):
+        raise EmbeddingError("internal: curve pieces do not meet in pairs")
+    used = [False] * len(pieces)
+    cycles = []
+    for start in range(len(pieces)):
+        if used[start]:
+            continue
+        cyc = []
+        i, forward = start, True
+        while not used[i]:
+            used[i] = True
+            pc = pieces[i] if forward else pieces[i][::-1]
+            cyc.append(pc[:-1])
+            (j, e), = [(j, e) for (j, e) in ends[key(pc[-1])] if j != i]
+            i, forward = j, (e == 0)
+        cycles.append(np.concatenate(cyc))
+    return cycles
+
+
 def cage_curve(spec: CageSpec, *, r: float = 0.09, pitch: float = 0.16,
                bulge: float = 5.0) -> list[np.ndarray]:
     """Smooth 4-fold cage as a list of closed polylines (one per component).
@@ -134,11 +164,7 @@ def cage_curve(spec: CageSpec, *, r: float = 0.09, pitch: float = 0.16,
     tb = 0.5 * pitch * spec.b
     box_a = _box(spec.a, spec.sa, ta, r, "y", 1.0, _SAMPLES_BOX)
     box_b = _box(spec.b, spec.sb, tb, r, "x", -1.0, _SAMPLES_BOX)
-    pieces = []  # (start key, end key, points)
-
-    def key(p):
-        return tuple(np.round(p, 9))
-
+    pieces = []
     for strand in box_a + box_b:
         pieces.append(strand)
     for sx, sy in itertools.product((1, -1), (1, -1)):
@@ -147,29 +173,7 @@ def cage_curve(spec: CageSpec, *, r: float = 0.09, pitch: float = 0.16,
         t0 = bulge * np.array([0.0, sy, 0.0])
         t1 = bulge * np.array([-sx, 0.0, 0.0])
         pieces.append(_hermite(p0, t0, p1, t1, _SAMPLES_ARC))
-    # chain the pieces into cycles through their shared end points
-    ends: dict = {}
-    for i, pc in enumerate(pieces):
-        for e, p in ((0, pc[0]), (1, pc[-1])):
-            ends.setdefault(key(p), []).append((i, e))
-    if any(len(v) != 2 for v in ends.values()):
-        raise EmbeddingError("internal: cage pieces do not meet in pairs")
-    used = [False] * len(pieces)
-    cycles = []
-    for start in range(len(pieces)):
-        if used[start]:
-            continue
-        cyc = []
-        i, forward = start, True
-        while not used[i]:
-            used[i] = True
-            pc = pieces[i] if forward else pieces[i][::-1]
-            cyc.append(pc[:-1])
-            tail = key(pc[-1])
-            (j, e), = [(j, e) for (j, e) in ends[tail] if j != i]
-            i, forward = j, (e == 0)
-        cycles.append(np.concatenate(cyc))
-    return cycles
+    return _cycles(pieces)
 
 
 def _scaled_chain(poly: np.ndarray, n_beads: int) -> np.ndarray | None:

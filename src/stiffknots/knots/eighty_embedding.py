@@ -74,7 +74,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from stiffknots.knots.cage_embedding import _scaled_chain
+from stiffknots.knots.cage_embedding import _cycles, _scaled_chain
 from stiffknots.knots.embedding import D_MIN, EmbeddingError, embedding_report
 
 __all__ = [
@@ -420,35 +420,6 @@ def _pieces(spec: EightySpec, unit: float) -> list[np.ndarray]:
     for (s0, _), o in zip(hits, spec.over, strict=True):
         circle[:, 2] += o * hop * _bump(sc, s0, 0.3)
     return pieces + [lobe_b, circle]
-
-
-def _cycles(pieces: list[np.ndarray]) -> list[np.ndarray]:
-    """Chain open pieces into closed polylines through their shared end points."""
-
-    def key(p):
-        return tuple(np.round(p, 9))
-
-    ends: dict = {}
-    for i, pc in enumerate(pieces):
-        for e, p in ((0, pc[0]), (1, pc[-1])):
-            ends.setdefault(key(p), []).append((i, e))
-    if any(len(v) != 2 for v in ends.values()):
-        raise EmbeddingError("internal: 80 pieces do not meet in pairs")
-    used = [False] * len(pieces)
-    cycles = []
-    for start in range(len(pieces)):
-        if used[start]:
-            continue
-        cyc = []
-        i, forward = start, True
-        while not used[i]:
-            used[i] = True
-            pc = pieces[i] if forward else pieces[i][::-1]
-            cyc.append(pc[:-1])
-            (j, e), = [(j, e) for (j, e) in ends[key(pc[-1])] if j != i]
-            i, forward = j, (e == 0)
-        cycles.append(np.concatenate(cyc))
-    return cycles
 
 
 # --------------------------------------------------------------------------------------------
