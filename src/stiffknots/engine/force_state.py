@@ -14,7 +14,7 @@ import numpy as np
 
 from stiffknots.engine import kernel as K
 from stiffknots.engine.force_kernel import run_end_moves, run_slide_moves
-from stiffknots.engine.state import ChainState, MoveParams
+from stiffknots.engine.state import ChainState, MoveParams, acceptance_block
 
 END_BLOCK = 2000  # moves per block of the interleaving (crankshafts, then end moves)
 
@@ -132,10 +132,5 @@ class ForceChainState(ChainState):
                              (self.end_counters, 1, "pivot_bottom"),
                              (self.slide_counters, 0, "slide_top"),
                              (self.slide_counters, 1, "slide_bottom")):
-            tried = int(c[K.C_TRIED + cls])
-            out[name] = {
-                "tried": tried,
-                "accepted": int(c[K.C_ACCEPTED + cls]),
-                "rate": (c[K.C_ACCEPTED + cls] / tried) if tried else 0.0,
-            }
+            out[name] = acceptance_block(c, cls)
         return out

@@ -114,6 +114,13 @@ class MoveParams:
         return ip, fp
 
 
+def acceptance_block(counters: np.ndarray, cls: int) -> dict:
+    """Tried, accepted and acceptance rate of move class ``cls`` from kernel counters."""
+    tried = int(counters[K.C_TRIED + cls])
+    acc = int(counters[K.C_ACCEPTED + cls])
+    return {"tried": tried, "accepted": acc, "rate": acc / tried if tried else 0.0}
+
+
 def check_open_clamping(pos: np.ndarray, tol: float = 1e-9) -> tuple[float, float]:
     """Check that an open chain is clamped as the kernel expects; returns (z_first, z_last).
 
@@ -236,13 +243,5 @@ class ChainState:
         self.fpar[K.F_CMIN] = -2.0 if theta is None else float(np.cos(theta))
 
     def acceptance(self) -> dict:
-        c = self.counters
-        out = {}
-        for cls, name in ((0, "single"), (1, "multi")):
-            tried = int(c[K.C_TRIED + cls])
-            out[name] = {
-                "tried": tried,
-                "accepted": int(c[K.C_ACCEPTED + cls]),
-                "rate": (c[K.C_ACCEPTED + cls] / tried) if tried else 0.0,
-            }
-        return out
+        return {name: acceptance_block(self.counters, cls)
+                for cls, name in ((0, "single"), (1, "multi"))}
