@@ -463,8 +463,16 @@ def plot_tube(coords, ax=None, *, closed: bool | None = None, radius: float | No
         diffuse = np.clip(cap_normal @ light, 0.0, 1.0)
         cap_fc = cap_base.copy()
         cap_fc[:, :3] *= (0.32 + 0.68 * diffuse)[:, None]
-        polys += list(mesh.points[mesh.caps])
-        fc = np.vstack([fc, cap_fc])
+        # fan of degenerate quads (triangles with a repeated vertex): every polygon then has
+        # 4 vertices; matplotlib pads ragged polygon lists with uninitialised values that
+        # its 3D autoscaling can read (seen as a rare 'Axis limits cannot be NaN or Inf')
+        cap_pts = mesh.points[mesh.caps]  # (2, S, 3)
+        s_n = cap_pts.shape[1]
+        for c in range(len(cap_pts)):
+            for k in range(1, s_n - 1):
+                tri = cap_pts[c, [0, k, k + 1, k + 1]]
+                polys.append(tri)
+        fc = np.vstack([fc, np.repeat(cap_fc, s_n - 2, axis=0)])
     coll = Poly3DCollection(polys, facecolors=fc, edgecolors=fc, linewidths=0.25,
                             zsort="average")
     ax.add_collection3d(coll)
