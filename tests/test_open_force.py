@@ -346,12 +346,15 @@ def test_anneal_open_force_small_run_is_verified():
         anneal_open_force("3_1", 0.0, moves=1000)
 
 
-def test_cli_open_force_json(capsys):
+def test_cli_open_force_json(capsys, tmp_path):
     from stiffknots.cli import app
 
     app(["open", "3_1", "--ensemble", "force", "--force", "0.05", "--beads", "80", "--moves",
-         "200000", "--replicas", "1", "--json"], standalone_mode=False)
+         "200000", "--replicas", "1", "--json", "--out", str(tmp_path)], standalone_mode=False)
     d = json.loads(capsys.readouterr().out)
+    # pictures: the chain as a tube and μ against 1/L_e² with the bounds
+    assert (tmp_path / "F_0.05" / "best.png").stat().st_size > 10_000
+    assert (tmp_path / "tension.png").stat().st_size > 10_000
     for key in ("knot", "force", "tension", "excess_length", "eps_e", "shape", "points"):
         assert key in d
     assert d["knot"] == "3_1" and d["force"] == 0.05 and d["ensemble"] == "force"

@@ -214,12 +214,23 @@ def _open_force(name, excess_length, force, beads, moves, replicas, seed, exclus
 
         from stiffknots._json import json_default
 
+        from stiffknots.knots.catalogue import get_knot
+        from stiffknots.report.figures import plot_tension, save_figure
+        from stiffknots.report.render import save_chain_png
+
         out_dir = Path(out_dir)
         files = {}
         for r in results:
             sub = out_dir / f"F_{r.force:g}"
             r.save(sub)
+            save_chain_png(r.best.coords, sub / "best.png", closed=False,
+                           title=f"open {r.knot}, F = {r.force:g}: L_e = "
+                                 f"{r.excess_length:.1f}, ε_e = {r.eps_e:.2f}")
             files[f"F_{r.force:g}"] = str(sub)
+        kk = get_knot(res0.knot)
+        pts = [{"knot": r.knot, "L_e": r.excess_length, "mu": r.tension,
+                "n": kk.bridge_number, "i": kk.braid_index} for r in results]
+        files["tension_png"] = str(save_figure(plot_tension(pts), out_dir / "tension.png"))
         (out_dir / "summary.json").write_text(json.dumps(summary, indent=2,
                                                          default=json_default))
         files["summary"] = str(out_dir / "summary.json")
