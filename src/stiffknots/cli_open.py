@@ -213,7 +213,6 @@ def _open_force(name, excess_length, force, beads, moves, replicas, seed, exclus
         import json
 
         from stiffknots._json import json_default
-
         from stiffknots.knots.catalogue import get_knot
         from stiffknots.report.figures import plot_tension, save_figure
         from stiffknots.report.render import save_chain_png
