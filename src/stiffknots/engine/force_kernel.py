@@ -162,6 +162,32 @@ CLS_BOTTOM = 1
 
 
 @njit(cache=True, inline="always")
+def _commit_end(pos, newpos, count, base, step, top, fpar, head, nxt, prv, bucket, inv, mask):
+    """Write an accepted end move: ``count`` beads from ``newpos`` (bead base + k·step), the
+    slab bound of the moved end, and the cell of every segment that starts at a moved bead
+    counted from that end."""
+    n = pos.shape[0]
+    for k in range(count):
+        b = base + k * step
+        pos[b, 0] = newpos[k, 0]
+        pos[b, 1] = newpos[k, 1]
+        pos[b, 2] = newpos[k, 2]
+    if top:
+        fpar[F_ZHI] = pos[n - 1, 2]
+    else:
+        fpar[F_ZLO] = pos[0, 2]
+    for q in range(count):
+        v = (n - 2 - q) if top else q
+        h = _hash(
+            np.int64(math.floor(0.5 * (pos[v, 0] + pos[v + 1, 0]) * inv)),
+            np.int64(math.floor(0.5 * (pos[v, 1] + pos[v + 1, 1]) * inv)),
+            np.int64(math.floor(0.5 * (pos[v, 2] + pos[v + 1, 2]) * inv)),
+            mask,
+        )
+        _cell_update(v, h, head, nxt, prv, bucket)
+
+
+@njit(cache=True, inline="always")
 def _moving_pair_blocked(pax, pay, paz, pbx, pby, pbz, qax, qay, qaz, qbx, qby, qbz,
                          oax, oay, oaz, obx, oby, obz, rax, ray, raz, rbx, rby, rbz,
                          lim_mid2, w2, lrel):
@@ -533,24 +559,7 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
         # ---- accept ----------------------------------------------------------------------
         cnt[C_ACCEPTED + cls] += 1
         de_total += de
-        for k in range(m + 2):
-            b = base + k * step
-            pos[b, 0] = newpos[k, 0]
-            pos[b, 1] = newpos[k, 1]
-            pos[b, 2] = newpos[k, 2]
-        if top:
-            fpar[F_ZHI] = pos[n - 1, 2]
-        else:
-            fpar[F_ZLO] = pos[0, 2]
-        for q in range(m + 2):
-            v = (n - 2 - q) if top else q
-            h = _hash(
-                np.int64(math.floor(0.5 * (pos[v, 0] + pos[v + 1, 0]) * inv)),
-                np.int64(math.floor(0.5 * (pos[v, 1] + pos[v + 1, 1]) * inv)),
-                np.int64(math.floor(0.5 * (pos[v, 2] + pos[v + 1, 2]) * inv)),
-                mask,
-            )
-            _cell_update(v, h, head, nxt, prv, bucket)
+        _commit_end(pos, newpos, m + 2, base, step, top, fpar, head, nxt, prv, bucket, inv, mask)
     rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
     return de_total
 
@@ -823,23 +832,6 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
         # ---- accept ----------------------------------------------------------------------
         cnt[C_ACCEPTED + cls] += 1
         de_total += de
-        for k in range(m + 3):
-            b = base + k * step
-            pos[b, 0] = newpos[k, 0]
-            pos[b, 1] = newpos[k, 1]
-            pos[b, 2] = newpos[k, 2]
-        if top:
-            fpar[F_ZHI] = pos[n - 1, 2]
-        else:
-            fpar[F_ZLO] = pos[0, 2]
-        for q in range(m + 3):
-            v = (n - 2 - q) if top else q
-            h = _hash(
-                np.int64(math.floor(0.5 * (pos[v, 0] + pos[v + 1, 0]) * inv)),
-                np.int64(math.floor(0.5 * (pos[v, 1] + pos[v + 1, 1]) * inv)),
-                np.int64(math.floor(0.5 * (pos[v, 2] + pos[v + 1, 2]) * inv)),
-                mask,
-            )
-            _cell_update(v, h, head, nxt, prv, bucket)
+        _commit_end(pos, newpos, m + 3, base, step, top, fpar, head, nxt, prv, bucket, inv, mask)
     rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
     return de_total
