@@ -24,8 +24,9 @@ test-all: $(STAMP)  ## every test, slow ones included
 bench: $(STAMP)  ## benchmarks that print numbers (see bench/RESULTS.md)
 	$(PY) bench/run_bench.py
 
-lint: $(STAMP)
+lint: $(STAMP)  ## ruff, and the layer contracts of pyproject.toml (import-linter)
 	$(VENV)/bin/ruff check src tests bench
+	$(VENV)/bin/lint-imports
 
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info

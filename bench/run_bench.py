@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from stiffknots.engine.benchmark import run_benchmarks
+from stiffknots.studies.benchmark import run_benchmarks
 
 if __name__ == "__main__":
     seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 10

@@ -26,10 +26,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from stiffknots.engine.benchmark import TARGETS, _chain
 from stiffknots.engine.driver import AnnealSettings, run_replica
+from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
-from stiffknots.engine.state import MoveParams
+from stiffknots.engine.tempering import run_tempering
+from stiffknots.studies.benchmark import TARGETS, _chain
 
 
 def settings_of(cfg: dict, knot: str) -> AnnealSettings:
@@ -44,7 +45,9 @@ def settings_of(cfg: dict, knot: str) -> AnnealSettings:
 
 def job(args) -> dict:
     knot, seed, cfg = args
-    r = run_replica(_chain(knot, 150), settings_of(cfg, knot), seed)
+    settings = settings_of(cfg, knot)
+    runner = run_tempering if settings.schedule.kind == "tempering" else run_replica
+    r = runner(_chain(knot, 150), settings, seed)
 
     def inf(x):
         return math.inf if x is None else x

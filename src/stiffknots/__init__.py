@@ -4,30 +4,67 @@ Implements Gallotti & Pierre-Louis, "Stiff knots", Phys. Rev. E (2007): bounds f
 number and braid index, the planar elastica constants, Monte Carlo annealing of knotted chains,
 open knots under tension and the restricted-curvature problem, for every knot in KnotInfo.
 
-The top-level functions are imported lazily (numba compiles on first use, not on import).
+Everyday objects, one import away::
+
+    import stiffknots as sk
+    k = sk.get_knot("5_2")                       # catalogue entry (n, i, braid word, ...)
+    sk.closed_bounds(k.bridge_number, k.braid_index)
+    res = sk.anneal("4_1", replicas=2)           # verified minimum-energy chains (§VII)
+    sk.classify(res.best.coords).label           # 'CB', '4C', '80' or 'other'
+    c = sk.load("runs/4_1/best.xyz"); c.epsilon()
+
+Names are imported lazily (numba compiles on first use, and nothing heavy loads on import).
 """
 
 from stiffknots._version import __version__
 
-__all__ = ["__version__", "anneal", "anneal_open", "anneal_open_force", "tension_scan",
-           "tightest"]
+_LAZY = {
+    # problems (§VII–IX)
+    "anneal": "stiffknots.problems.closed",
+    "anneal_open": "stiffknots.problems.open_extension",
+    "tension_scan": "stiffknots.problems.open_extension",
+    "anneal_open_force": "stiffknots.problems.open_force",
+    "tightest": "stiffknots.problems.tightest",
+    # core objects
+    "Chain": "stiffknots.chain",
+    "regular_polygon": "stiffknots.chain",
+    "load": "stiffknots.formats",
+    "save": "stiffknots.formats",
+    "get_knot": "stiffknots.knots.catalogue",
+    "catalogue": "stiffknots.knots.catalogue",
+    "identify": "stiffknots.knots.identify",
+    "verify_knot": "stiffknots.knots.identify",
+    "knot_summary": "stiffknots.knots.summary",
+    # analysis
+    "classify": "stiffknots.analysis",
+    "group_states": "stiffknots.analysis",
+    "analyse_structure": "stiffknots.analysis",
+    # theory
+    "closed_bounds": "stiffknots.theory.bounds",
+    "open_bounds": "stiffknots.theory.bounds",
+    "restricted_curvature_bounds": "stiffknots.theory.bounds",
+    "elastica_constants": "stiffknots.theory.elastica",
+    # engine settings
+    "MoveParams": "stiffknots.engine.params",
+    "Schedule": "stiffknots.engine.schedules",
+    # errors
+    "StiffKnotsError": "stiffknots.errors",
+    "UserInputError": "stiffknots.errors",
+}
+
+__all__ = ["__version__", *sorted(_LAZY)]
 
 
 def __getattr__(name: str):
-    if name == "anneal":
-        from stiffknots.annealing import anneal
+    mod = _LAZY.get(name)
+    if mod is None:
+        raise AttributeError(f"module 'stiffknots' has no attribute {name!r}")
+    import importlib
 
-        return anneal
-    if name in ("anneal_open", "tension_scan"):
-        from stiffknots import open_knots
+    value = getattr(importlib.import_module(mod), name)
+    globals()[name] = value  # cache: later lookups skip __getattr__
+    return value
 
-        return getattr(open_knots, name)
-    if name == "anneal_open_force":
-        from stiffknots.open_force import anneal_open_force
 
-        return anneal_open_force
-    if name == "tightest":
-        from stiffknots.tightest import tightest
-
-        return tightest
-    raise AttributeError(f"module 'stiffknots' has no attribute {name!r}")
+def __dir__():
+    return __all__

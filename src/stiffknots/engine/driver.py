@@ -1,79 +1,111 @@
-"""Annealing driver: one replica = embedding → schedule → quench → verification (paper §VII).
+"""The run loop: one replica = a plan of chunks run on one state, verified (paper §VII).
 
-The driver composes the kernel (:mod:`stiffknots.engine.kernel`) with a schedule; it knows
-arrays and numbers only. Replicas run in separate processes (one per core) and each result
-carries its seed, its parameters and the package version, so that it can be reproduced.
+The driver composes the state (:mod:`stiffknots.engine.state`, any ensemble) with a *plan*: a
+fixed list of chunks (moves, temperature) made from the settings alone (:func:`plan_steps`).
+It knows arrays and numbers only. Every ensemble — a closed chain, an open chain at fixed
+extension or at fixed force — and every plan runs through this one loop, with the same
+checkpoints, traces and verification; replica exchange (:mod:`stiffknots.engine.tempering`)
+builds on the same pieces.
 
-A run is a fixed *plan*: a list of chunks (moves, temperature), made from the settings alone
-(:func:`plan_steps`). With the default schedule it has two stages, each ending with a T = 0
-quench (see :mod:`stiffknots.engine.schedules`): a low-temperature relaxation of the starting
-chain, then the paper's power-law annealing from a hot start; the result is the quenched chain
-of lower energy. ``Schedule(kind="tempering")`` runs replica exchange instead
-(:mod:`stiffknots.engine.tempering`).
+Plans
+-----
+``anneal`` (the default): two stages, each ending with a T = 0 quench (see
+:mod:`stiffknots.engine.schedules`): a low-temperature relaxation of the starting chain, then
+the paper's power-law annealing from a hot start; the result is the quenched chain of lower
+energy.
+
+``tight`` (the restricted-curvature search of §IX D): a continuation in p of the energy
+Σ((1 − cos θ)/s)^p — p = 1 is the bending energy annealed with the schedule, then each higher
+p re-seeds the generator, takes s from the 90th percentile of the current turning angles and
+anneals geometrically from 10⁻² to 10⁻⁵ times the energy per bead at its start — and a final
+ratchet quench whose curvature limit θ_max follows the largest turning angle down after every
+chunk.
+
+Energy bookkeeping
+------------------
+After every chunk the incremental energy is compared with the energy recomputed from scratch
+and then replaced by it. The comparison allows 1e-9 of the largest energy the chunk saw
+(|E| at its start or end, at least 1): the rounding error of a sum of increments is relative
+to the magnitudes summed, and in the power energy of the ``tight`` plan a chunk can start at
+E ~ 10¹¹ and end at E ~ 30, so a tolerance relative to the final energy alone fails on
+correct runs (1.3e-6 relative was seen), while a real bookkeeping error — a joint missed by a
+move — is of the order of the joint energies. The replacement stops rounding errors from
+accumulating over chunks. It never changes a move's decision (those depend on energy
+differences only).
 
 Checkpoints
 -----------
 A long run can write its whole state to one ``.npz`` file every K chunks and/or every S
-seconds (positions, generator state, counters, incremental energy, chunk index, traces, best
-chain so far, settings, seed, version) and be resumed from it. The plan depends on the settings
-only and the kernel's result does not depend on the order of its cell lists, so a resumed run
-ends with *exactly* the chain and energy of an uninterrupted run with the same seed (only the
-wall-clock traces differ). A checkpoint is only resumed by a run with the same settings, seed,
-replica index, starting chain and package version; anything else is refused.
+seconds (positions, generator state, counters, incremental energies, chunk index, traces, best
+chain so far, the current energy parameters and curvature limit, settings, seed, version) and
+be resumed from it. The plan depends on the settings only and the kernels' results do not
+depend on the order of their cell lists, so a resumed run ends with *exactly* the chain and
+energy of an uninterrupted run with the same seed (only the wall-clock traces differ). A
+checkpoint is only resumed by a run with the same settings, seed, replica index, starting
+chain and package version; anything else, and any corrupt file, raises
+:class:`~stiffknots.errors.CheckpointError`.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import time
-from dataclasses import asdict, dataclass, field
+import zipfile
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from stiffknots._version import __version__
-from stiffknots.engine.kernel import min_nonadjacent_segment_distance
+from stiffknots.engine.params import Ensemble, MoveParams
+from stiffknots.engine.prims import min_nonadjacent_segment_distance, turning_cosines
 from stiffknots.engine.schedules import Schedule
-from stiffknots.engine.state import ChainState, MoveParams
+from stiffknots.engine.state import ChainState, check_open_clamping
+from stiffknots.errors import (
+    ChainGeometryError,
+    CheckpointError,
+    EnergyBookkeepingError,
+    RunStopped,
+)
+from stiffknots.fileio import atomic_path
 
-CHECKPOINT_FORMAT = 1
+__all__ = ["AnnealSettings", "Clock", "ReplicaResult", "Step", "plan_steps", "run_replica",
+           "replica_seeds"]
+
+CHECKPOINT_FORMAT = 2
 QUENCH_CHUNKS = 10
-
-
-class TopologyChangedError(RuntimeError):
-    """A run ended with a knot type different from the one it started with (never expected:
-    the moves forbid strand passage by construction; this is a bug, never a data point)."""
-
-
-class EnergyBookkeepingError(RuntimeError):
-    """The incrementally tracked energy differs from the energy recomputed from scratch."""
-
-
-class RunStopped(RuntimeError):  # noqa: N818 (not an error: a requested stop)
-    """A run stopped on request (``stop_after`` chunks) after writing its checkpoint.
-
-    Attributes
-    ----------
-    checkpoint : path of the checkpoint to resume from.
-    step, n_steps : chunks done so far and chunks in the whole plan.
-    """
-
-    def __init__(self, checkpoint: Path, step: int, n_steps: int):
-        super().__init__(f"stopped after chunk {step}/{n_steps}; resume from {checkpoint}")
-        self.checkpoint = checkpoint
-        self.step = step
-        self.n_steps = n_steps
+PLANS = ("anneal", "tight")
+DEFAULT_POWERS = (1, 2, 4, 8, 16, 32, 64)
+TIGHT_CHUNKS = 100  # chunks per power of the ``tight`` plan
+RATCHET_CHUNKS = 20  # chunks of its final ratchet quench
+TIGHT_SEED_STRIDE = 7919  # stage k of the ``tight`` plan re-seeds with seed + 7919·k
+BOOKKEEPING_RTOL = 1e-9
+TRACE_KEYS = ("moves", "temperature", "epsilon", "seconds")
 
 
 @dataclass
 class AnnealSettings:
     """Everything that defines a replica's run besides its starting chain and seed.
 
+    Attributes
+    ----------
+    moves : attempted moves of the whole run.
+    schedule : the temperature schedule (:class:`Schedule`).
+    params : moves, exclusion and energy (:class:`MoveParams`).
+    quench_fraction : fraction of each stage's moves spent in its T = 0 quench (``anneal``).
+    n_chunks : chunks of the annealing (a chunk is the unit of traces and checkpoints).
+    target_epsilon : record the wall and CPU seconds at which ε first falls to this value.
+    ensemble : closed chain, open chain at fixed extension or at fixed force (:class:`Ensemble`).
+    plan : ``"anneal"`` or ``"tight"`` (see the module docstring).
+    powers : the powers p of the ``tight`` plan's continuation.
+
     The defaults (``moves``, :class:`Schedule`, :class:`MoveParams`) are the measured winners of
-    bench/RESULTS.md: 30 M moves, of which the first third relaxes the starting chain
-    (t = 5e-5 → 1e-7) and the rest anneals from t = 3e-2 with the paper's power law (§VII).
+    bench/RESULTS.md: 30 M moves, of which the first 40 % relax the starting chain
+    (t = 5e-5 → 1e-7) and the rest anneal from t = 3e-2 with the paper's power law (§VII).
     """
 
     moves: int = 30_000_000
@@ -82,7 +114,13 @@ class AnnealSettings:
     quench_fraction: float = 0.1
     n_chunks: int = 200
     target_epsilon: float | None = None
-    closed: bool = True  # False: an open chain clamped on the z axis (paper §VIII)
+    ensemble: Ensemble = field(default_factory=Ensemble)
+    plan: str = "anneal"
+    powers: tuple[int, ...] = DEFAULT_POWERS
+
+    @property
+    def closed(self) -> bool:
+        return self.ensemble.closed
 
     def validate(self) -> None:
         if self.moves < 1000:
@@ -91,28 +129,42 @@ class AnnealSettings:
             raise ValueError(f"quench_fraction must be in [0, 1], got {self.quench_fraction}")
         if self.n_chunks < 1:
             raise ValueError(f"n_chunks must be ≥ 1, got {self.n_chunks}")
+        if self.plan not in PLANS:
+            raise ValueError(f"unknown plan {self.plan!r}; allowed: {', '.join(PLANS)}")
+        if self.plan == "tight" and (not self.powers or any(int(p) != p or p < 1
+                                                             for p in self.powers)):
+            raise ValueError(f"powers must be integers ≥ 1, got {self.powers}")
         self.schedule.validate()
+        self.ensemble.validate()
 
     def as_dict(self) -> dict:
-        return {
+        d = {
             "moves": self.moves,
             "schedule": self.schedule.as_dict(),
             "params": self.params.as_dict(),
             "quench_fraction": self.quench_fraction,
             "n_chunks": self.n_chunks,
-            "closed": self.closed,
+            "ensemble": self.ensemble.as_dict(),
+            "plan": self.plan,
         }
+        if self.plan == "tight":
+            d["powers"] = [int(p) for p in self.powers]
+        return d
 
 
 @dataclass
 class ReplicaResult:
-    """Outcome of one annealing replica (all fields plain data; picklable, JSON-able).
+    """Outcome of one replica's run (plain data; picklable, JSON-able but for the arrays).
 
     ``coords``/``epsilon`` are the best quenched chain of the run (the lower of the stages);
     ``stage_epsilon`` gives each stage's quenched ε and ``best_stage`` the winner.
-    ``seconds_to_target``/``cpu_seconds_to_target``: wall-clock and CPU seconds until ε first
-    fell to ``target_epsilon`` (None: never). ``tempering``: ladder and swap statistics of a
-    replica-exchange run (None for annealing).
+    ``traces`` holds one value per chunk: ``moves`` (done so far), ``temperature``,
+    ``epsilon`` (of the state's energy), ``seconds``, and ``excess_length`` (fixed force) or
+    ``theta_max`` (``tight`` plan). ``seconds_to_target``/``cpu_seconds_to_target``:
+    wall-clock and CPU seconds until ε first fell to ``target_epsilon`` (None: never).
+    ``tempering``: ladder and swap statistics of a replica-exchange run (None otherwise).
+    Open chains: ``excess_length``, ``extension`` (Δz), ``force`` and ``total_energy``
+    (E_d − F·Δz). ``max_turn``: the largest turning angle of the chain (radians).
     """
 
     replica: int
@@ -122,31 +174,46 @@ class ReplicaResult:
     energy_recomputed: float
     coords: np.ndarray
     acceptance: dict
-    trace_moves: np.ndarray
-    trace_temperature: np.ndarray
-    trace_epsilon: np.ndarray
-    trace_seconds: np.ndarray
+    traces: dict
     wall_time: float
     max_bond_error: float
     exclusion_margin: float
     min_segment_distance: float
+    max_turn: float = 0.0
     seconds_to_target: float | None = None
-    knot: str | None = None
-    knot_verified: bool | None = None
-    version: str = __version__
     cpu_seconds_to_target: float | None = None
     cpu_time: float | None = None
     stage_epsilon: dict = field(default_factory=dict)
     best_stage: str | None = None
     tempering: dict | None = None
     resumed_from_step: int | None = None
-    start: str | None = None  # starting embedding ('braid', 'cage', …), set by the caller
+    excess_length: float | None = None
+    extension: float | None = None
+    force: float | None = None
+    total_energy: float | None = None
+    version: str = __version__
+
+    @property
+    def trace_moves(self) -> np.ndarray:
+        return self.traces["moves"]
+
+    @property
+    def trace_temperature(self) -> np.ndarray:
+        return self.traces["temperature"]
+
+    @property
+    def trace_epsilon(self) -> np.ndarray:
+        return self.traces["epsilon"]
+
+    @property
+    def trace_seconds(self) -> np.ndarray:
+        return self.traces["seconds"]
 
     def summary(self) -> dict:
+        """Every field but the coordinates and the traces."""
         d = asdict(self)
-        for key in ("coords", "trace_moves", "trace_temperature", "trace_epsilon",
-                    "trace_seconds"):
-            d.pop(key)
+        d.pop("coords")
+        d.pop("traces")
         return d
 
 
@@ -154,13 +221,21 @@ class ReplicaResult:
 class Step:
     """One chunk of a run's plan: ``moves`` attempted at ``temperature`` (0: quench).
 
-    ``last`` marks the last chunk of a stage: the chain after it is a candidate result.
+    ``last`` marks the last chunk of a stage whose chain is a candidate result. ``setup``
+    (``tight`` plan, a stage's first chunk): ``(energy, power, k)`` — switch to that energy
+    (the power energy takes its scale from the current angles) and re-seed with
+    seed + 7919·k. ``t_factor``: the temperature is ``e_ref·temperature·t_factor`` with
+    ``e_ref`` the energy per bead at the stage's setup (None: absolute). ``ratchet``: after
+    the chunk, lower the curvature limit θ_max to the largest turning angle.
     """
 
     moves: int
     temperature: float
     stage: str
     last: bool = False
+    setup: tuple | None = None
+    t_factor: float | None = None
+    ratchet: bool = False
 
 
 def _split(total: int, parts: int) -> list[int]:
@@ -171,11 +246,12 @@ def _split(total: int, parts: int) -> list[int]:
 
 
 def plan_steps(settings: AnnealSettings) -> list[Step]:
-    """The chunks of an annealing run (relaxation stage if any, annealing stage, quenches).
-
-    ``settings.n_chunks`` annealing chunks and 10 quench chunks in all, shared between the
-    stages in proportion to their moves; the moves add up to ``settings.moves`` exactly.
-    """
+    """The chunks of a run: the ``anneal`` plan (relaxation stage if any, annealing stage,
+    quenches; ``settings.n_chunks`` annealing chunks and 10 quench chunks in all, shared
+    between the stages in proportion to their moves, adding up to ``settings.moves``) or the
+    ``tight`` plan (module docstring)."""
+    if settings.plan == "tight":
+        return _tight_steps(settings)
     sch = settings.schedule
     total = int(settings.moves)
     stages = sch.stages
@@ -208,8 +284,45 @@ def plan_steps(settings: AnnealSettings) -> list[Step]:
         if nq > 0:
             for m in _split(nq, min(quench[s], nq)):
                 steps.append(Step(m, 0.0, s))
-        steps[-1] = Step(steps[-1].moves, steps[-1].temperature, s, last=True)
+        steps[-1] = replace(steps[-1], last=True)
     return steps
+
+
+def _tight_steps(settings: AnnealSettings) -> list[Step]:
+    """The ``tight`` plan: each power p of ``settings.powers`` gets an equal share of the
+    moves in 100 chunks (p = 1: the schedule's annealing; p > 1: geometric from 10⁻² to 10⁻⁵
+    of the energy per bead), then the ratchet quench gets one more share in 20 chunks."""
+    powers = tuple(int(p) for p in settings.powers)
+    per_stage = max(1000, int(settings.moves) // (len(powers) + 1))
+    sch = settings.schedule
+    steps: list[Step] = []
+    for k, p in enumerate(powers):
+        setup = ("bending" if p == 1 else "power", p, k)
+        for c in range(TIGHT_CHUNKS):
+            first = setup if c == 0 else None
+            if p == 1:  # the paper's annealing of the bending energy: a smooth start
+                steps.append(Step(per_stage // TIGHT_CHUNKS,
+                                  float(sch.temperature((c + 0.5) / TIGHT_CHUNKS)), f"p{p}",
+                                  setup=first))
+            else:
+                steps.append(Step(per_stage // TIGHT_CHUNKS, 1e-2, f"p{p}", setup=first,
+                                  t_factor=1e-3 ** (c / TIGHT_CHUNKS)))
+    for _ in range(RATCHET_CHUNKS):
+        steps.append(Step(per_stage // RATCHET_CHUNKS, 0.0, "ratchet", ratchet=True))
+    steps[-1] = replace(steps[-1], last=True)
+    return steps
+
+
+def stage_params(params: MoveParams, energy: str, power: int, pos: np.ndarray,
+                 closed: bool = True) -> MoveParams:
+    """The parameters of a ``tight`` stage: the bending energy, or the power energy with its
+    scale s = 1 − cos θ₉₀ (θ₉₀ the 90th percentile of the current turning angles, so that the
+    energies stay of order one)."""
+    if energy == "bending":
+        return replace(params, energy="bending")
+    th90 = float(np.percentile(np.arccos(np.clip(turning_cosines(pos, not closed), -1, 1)), 90))
+    return replace(params, energy="power", power=int(power),
+                   energy_scale=float(1 - np.cos(max(th90, 1e-3))))
 
 
 # ------------------------------------------------------------------------------------------
@@ -223,25 +336,39 @@ def start_digest(coords: np.ndarray) -> str:
 
 
 def save_checkpoint(path: str | Path, arrays: dict[str, np.ndarray], meta: dict) -> Path:
-    """Write ``arrays`` and the JSON ``meta`` to ``path`` (``.npz``) atomically."""
+    """Write ``arrays`` and the JSON ``meta`` to ``path`` (``.npz``) atomically (a temporary
+    file of a unique name, then one rename: concurrent writers never share it)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
     payload = dict(arrays)
     payload["meta"] = np.array(json.dumps(meta))
-    with open(tmp, "wb") as f:
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
         np.savez(f, **payload)
-    os.replace(tmp, path)
     return path
 
 
 def load_checkpoint(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
-    """Read a checkpoint written by :func:`save_checkpoint`: (arrays, meta)."""
-    with np.load(Path(path), allow_pickle=False) as z:
-        arrays = {k: z[k] for k in z.files if k != "meta"}
-        meta = json.loads(str(z["meta"]))
-    if meta.get("format") != CHECKPOINT_FORMAT:
-        raise ValueError(f"{path}: not a stiffknots checkpoint of format {CHECKPOINT_FORMAT}")
+    """Read a checkpoint written by :func:`save_checkpoint`: (arrays, meta).
+
+    Raises
+    ------
+    CheckpointError
+        If the file is not a readable stiffknots checkpoint (empty, truncated, junk, a folder,
+        another format version).
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files if k != "meta"}
+            meta = json.loads(str(z["meta"]))
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile,
+            json.JSONDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else type(exc).__name__
+        raise CheckpointError(f"corrupt checkpoint {path} ({why}); delete it to start afresh"
+                              ) from None
+    if not isinstance(meta, dict) or meta.get("format") != CHECKPOINT_FORMAT:
+        raise CheckpointError(f"{path}: not a stiffknots checkpoint of format "
+                              f"{CHECKPOINT_FORMAT}; delete it to start afresh")
     return arrays, meta
 
 
@@ -260,28 +387,41 @@ def run_meta(kind: str, settings: AnnealSettings, seed: int, replica: int,
 
 
 def check_resumable(meta: dict, expected: dict, path: Path) -> None:
-    """Raise ValueError naming the first field in which a checkpoint differs from the run."""
+    """Raise CheckpointError naming the first field in which a checkpoint differs from the
+    run."""
     for key in ("kind", "version", "seed", "replica", "start", "settings"):
         if meta.get(key) != expected[key]:
             what = "starting chain" if key == "start" else key
-            raise ValueError(
+            raise CheckpointError(
                 f"checkpoint {path} was written by a different run ({what} differs: "
                 f"{meta.get(key)!r} ≠ {expected[key]!r}); delete it or drop resume"
             )
 
 
-def restore_state(pos: np.ndarray, rng: np.ndarray, counters: np.ndarray, energy: float,
-                  settings: AnnealSettings) -> ChainState:
-    """A ChainState exactly as it was checkpointed (generator, counters, incremental energy).
+def restore_state(arrays: dict, settings: AnnealSettings, params: MoveParams | None = None,
+                  prefix: str = "") -> ChainState:
+    """A ChainState exactly as it was checkpointed (generator, counters, incremental energies).
 
-    The cell list is rebuilt from the positions; the kernel's decisions do not depend on the
-    order of its lists, so the continuation is bit-for-bit the uninterrupted one.
+    The cell list is rebuilt from the positions; the kernels' decisions do not depend on the
+    order of their lists, so the continuation is bit-for-bit the uninterrupted one.
     """
-    st = ChainState(pos, settings.params, seed=0, closed=settings.closed)
-    st.rng[:] = np.asarray(rng, dtype=np.uint64)
-    st.counters[:] = np.asarray(counters, dtype=np.int64)
-    st.energy = float(energy)
+    st = ChainState(arrays[prefix + "pos"], params or settings.params, seed=0,
+                    ensemble=settings.ensemble)
+    st.rng[:] = np.asarray(arrays[prefix + "rng"], dtype=np.uint64)
+    st.counters[:] = np.asarray(arrays[prefix + "counters"], dtype=np.int64)
+    if prefix + "end_counters" in arrays:
+        st.end_counters[:] = np.asarray(arrays[prefix + "end_counters"], dtype=np.int64)
+        st.slide_counters[:] = np.asarray(arrays[prefix + "slide_counters"], dtype=np.int64)
+    st.energy = float(arrays[prefix + "energy"])
+    st.total_energy = float(arrays[prefix + "total_energy"])
     return st
+
+
+def state_arrays(state: ChainState) -> dict[str, np.ndarray]:
+    """The arrays that :func:`restore_state` needs."""
+    return {"pos": state.pos, "rng": state.rng, "counters": state.counters,
+            "end_counters": state.end_counters, "slide_counters": state.slide_counters,
+            "energy": np.float64(state.energy), "total_energy": np.float64(state.total_energy)}
 
 
 class Checkpointer:
@@ -292,7 +432,7 @@ class Checkpointer:
         self.path = Path(path) if path is not None else None
         if every is not None and every < 1:
             raise ValueError(f"checkpoint_every must be ≥ 1 chunk, got {every}")
-        if seconds is not None and seconds <= 0:
+        if seconds is not None and not seconds > 0:
             raise ValueError(f"checkpoint_seconds must be > 0, got {seconds}")
         if self.path is not None and every is None and seconds is None:
             every = 10
@@ -329,67 +469,120 @@ class Clock:
         return time.process_time() - self.c0
 
 
+# ------------------------------------------------------------------------------------------
+# verification
+# ------------------------------------------------------------------------------------------
+
+
 def _bonds(pos: np.ndarray, closed: bool) -> np.ndarray:
     if closed:
         return np.linalg.norm(np.roll(pos, -1, axis=0) - pos, axis=1)
     return np.linalg.norm(np.diff(pos, axis=0), axis=1)
 
 
-def check_bookkeeping(state: ChainState) -> float:
-    """The recomputed energy; EnergyBookkeepingError if the incremental one differs."""
+def check_bookkeeping(state: ChainState, peak: float = 0.0) -> float:
+    """The recomputed energy; EnergyBookkeepingError if the incremental one (or, at fixed
+    force, E_d − F·Δz) differs by more than 1e-9 of max(1, |E|, ``peak``) — ``peak`` the
+    largest |E| the incremental sum went through (module docstring)."""
     e_rec = state.recomputed_energy()
-    if abs(e_rec - state.energy) > 1e-9 * max(1.0, abs(e_rec)):
+    ref = max(1.0, abs(e_rec), abs(state.energy), peak)
+    if abs(e_rec - state.energy) > BOOKKEEPING_RTOL * ref:
         raise EnergyBookkeepingError(
             f"incremental energy {state.energy!r} differs from recomputed {e_rec!r}"
         )
+    if state.ensemble.kind == "force":
+        rec = state.recomputed_total()
+        ref = max(1.0, abs(rec), abs(state.total_energy), peak)
+        if abs(rec - state.total_energy) > BOOKKEEPING_RTOL * ref:
+            raise EnergyBookkeepingError(
+                f"incremental E_d − F·Δz {state.total_energy!r} differs from recomputed {rec!r}")
     return e_rec
+
+
+def resync(state: ChainState, peak: float = 0.0) -> None:
+    """Check the bookkeeping (:func:`check_bookkeeping`), then replace the incremental
+    energies by the recomputed ones so that rounding errors never accumulate."""
+    state.energy = check_bookkeeping(state, peak)
+    state.total_energy = state.recomputed_total()
+
+
+def check_chain(state: ChainState, where: str = "final chain") -> None:
+    """Raise ChainGeometryError if a bond is off by more than 1e-10, an open chain's clamping
+    is broken or the exclusion rule is violated (never expected: the moves keep all three)."""
+    err = float(np.max(np.abs(_bonds(state.pos, state.closed) - 1.0)))
+    if err > 1e-10:
+        raise ChainGeometryError(f"{where}: bond length off by {err:.3g}")
+    if not state.closed:
+        try:
+            # the end moves put the ends exactly on the axis; fixed ends stay as embedded
+            check_open_clamping(state.pos, tol=0.0 if state.ensemble.kind == "force" else 1e-9)
+        except ValueError as exc:
+            raise ChainGeometryError(f"{where}: {exc}") from None
+    v = state.violation()
+    if v > 1e-12:
+        raise ChainGeometryError(
+            f"{where}: the {state.params.exclusion} exclusion rule is violated by {v:.3g}")
 
 
 def make_result(replica: int, seed: int, settings: AnnealSettings, best: ChainState,
                 acceptance: dict, traces: dict, clock: Clock, hit: tuple, **extra
                 ) -> ReplicaResult:
-    """Verify ``best`` (bookkeeping, bonds, exclusion) and pack the result."""
+    """Verify ``best`` (bookkeeping, bonds, clamping, exclusion) and pack the result."""
     e_rec = check_bookkeeping(best)
+    check_chain(best)
     pos = best.pos
+    closed = best.closed
+    open_fields = {} if closed else {
+        "excess_length": best.excess_length, "extension": best.extension,
+        "force": best.force, "total_energy": best.recomputed_total()}
     return ReplicaResult(
         replica=replica,
         seed=seed,
         # ε = E·N/C (closed, §VII) or ε_e = E·L_e/C (open, §VIII)
-        epsilon=e_rec * (best.n_beads if settings.closed else best.excess_length),
+        epsilon=e_rec * (best.n_beads if closed else best.excess_length),
         energy=e_rec,
         energy_recomputed=e_rec,
         coords=pos.copy(),
         acceptance=acceptance,
-        trace_moves=np.asarray(traces["moves"], dtype=np.int64),
-        trace_temperature=np.asarray(traces["temperature"], dtype=float),
-        trace_epsilon=np.asarray(traces["epsilon"], dtype=float),
-        trace_seconds=np.asarray(traces["seconds"], dtype=float),
+        traces={k: np.asarray(v, dtype=np.int64 if k == "moves" else float)
+                for k, v in traces.items()},
         wall_time=clock.wall(),
         cpu_time=clock.cpu(),
-        max_bond_error=float(np.max(np.abs(_bonds(pos, settings.closed) - 1.0))),
+        max_bond_error=float(np.max(np.abs(_bonds(pos, closed) - 1.0))),
         exclusion_margin=-best.violation(),
-        min_segment_distance=float(min_nonadjacent_segment_distance(pos, not settings.closed)),
+        min_segment_distance=float(min_nonadjacent_segment_distance(pos, not closed)),
+        max_turn=float(np.max(best.turning_angles())),
         seconds_to_target=hit[0],
         cpu_seconds_to_target=hit[1],
+        **open_fields,
         **extra,
     )
 
 
-TRACE_KEYS = ("moves", "temperature", "epsilon", "seconds")
+def trace_keys(settings: AnnealSettings) -> tuple[str, ...]:
+    """The traces a run records: ``TRACE_KEYS`` plus ``excess_length`` (fixed force) or
+    ``theta_max`` (``tight`` plan)."""
+    extra = ()
+    if settings.ensemble.kind == "force":
+        extra = ("excess_length",)
+    if settings.plan == "tight":
+        extra = extra + ("theta_max",)
+    return TRACE_KEYS + extra
 
 
 def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica: int = 0, *,
                 checkpoint: str | Path | None = None, checkpoint_every: int | None = None,
                 checkpoint_seconds: float | None = None, resume: bool = False,
-                stop_after: int | None = None) -> ReplicaResult:
-    """Run one replica: the plan of :func:`plan_steps` (or replica exchange), verified.
+                stop_after: int | None = None,
+                progress: Callable[[dict], None] | None = None) -> ReplicaResult:
+    """Run one replica: the plan of :func:`plan_steps` on one state, verified.
 
     Parameters
     ----------
-    coords : (N, 3) starting chain (unit bonds, exclusion respected).
-    settings : the run's settings; ``Schedule(kind="tempering")`` dispatches to
-        :func:`stiffknots.engine.tempering.run_tempering`.
-    seed : seed of the kernel's generator.
+    coords : (N, 3) starting chain (unit bonds, exclusion respected; open chains clamped).
+    settings : the run's settings (ensemble, plan, schedule, moves); a tempering schedule is
+        run by :func:`stiffknots.engine.tempering.run_tempering` instead.
+    seed : seed of the kernels' generator.
     replica : index recorded in the result.
     checkpoint : path of a ``.npz`` checkpoint file, written every ``checkpoint_every`` chunks
         and/or every ``checkpoint_seconds`` seconds (default every 10 chunks) and at the end.
@@ -397,6 +590,8 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
         settings, seed, replica, starting chain and version); otherwise start afresh.
     stop_after : stop after this many chunks in this call, write the checkpoint and raise
         :class:`RunStopped` (for time-limited batch jobs, and for tests).
+    progress : called after every chunk with ``{"replica", "done", "total", "epsilon",
+        "best"}`` (moves done and planned, the current and the lowest ε so far).
 
     Returns
     -------
@@ -405,23 +600,23 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
 
     Raises
     ------
-    EnergyBookkeepingError
-        If the incremental energy differs from the recomputed one by more than 1e-9 (rel.).
+    EnergyBookkeepingError, ChainGeometryError
+        If the verification fails (never expected: a bug).
+    CheckpointError
+        If ``resume`` finds a corrupt checkpoint or one of another run.
     RunStopped
         If ``stop_after`` chunks were run before the end.
     """
     settings.validate()
     if settings.schedule.kind == "tempering":
-        from stiffknots.engine.tempering import run_tempering
-
-        return run_tempering(coords, settings, seed, replica, checkpoint=checkpoint,
-                             checkpoint_every=checkpoint_every,
-                             checkpoint_seconds=checkpoint_seconds, resume=resume,
-                             stop_after=stop_after)
+        raise ValueError("a tempering schedule runs with engine.tempering.run_tempering")
     steps = plan_steps(settings)
+    keys = trace_keys(settings)
+    total = sum(s.moves for s in steps)
+    n = len(coords)
     ck = Checkpointer(checkpoint, checkpoint_every, checkpoint_seconds)
     expected = run_meta("anneal", settings, seed, replica, coords)
-    traces: dict[str, list] = {k: [] for k in TRACE_KEYS}
+    traces: dict[str, list] = {k: [] for k in keys}
     best_pos = None
     best_energy = np.inf
     stage_eps: dict[str, float] = {}
@@ -431,14 +626,16 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
     hit = (None, None)
     clock = Clock()
     resumed = None
+    e_ref = 0.0  # energy per bead at the current stage's setup (``tight`` plan)
+    cap: float | None = None  # curvature limit of the ratchet (``tight`` plan)
     if resume and ck.path is not None and ck.path.exists():
         arrays, meta = load_checkpoint(ck.path)
         check_resumable(meta, expected, ck.path)
-        state = restore_state(arrays["pos"], arrays["rng"], arrays["counters"],
-                              float(arrays["energy"]), settings)
+        params = MoveParams(**meta["params"])
+        state = restore_state(arrays, settings, params)
         step0 = int(meta["step"])
         done = int(meta["done"])
-        traces = {k: list(arrays[f"trace_{k}"]) for k in TRACE_KEYS}
+        traces = {k: list(arrays[f"trace_{k}"]) for k in keys}
         if "best_pos" in arrays:
             best_pos = arrays["best_pos"]
             best_energy = float(arrays["best_energy"])
@@ -446,21 +643,26 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
         best_stage = meta["best_stage"]
         hit = (meta["seconds_to_target"], meta["cpu_seconds_to_target"])
         clock = Clock(meta["wall"], meta["cpu"])
+        e_ref = float(meta["e_ref"])
+        cap = meta["cap"]
+        if cap is not None:
+            state.set_max_turn(cap)
         resumed = step0
     else:
-        state = ChainState(coords, settings.params, seed=seed, closed=settings.closed)
+        state = ChainState(coords, settings.params, seed=seed, ensemble=settings.ensemble)
     target = settings.target_epsilon
+    lowest = min(traces["epsilon"]) if traces["epsilon"] else math.inf
 
     def save(step: int) -> Path:
-        arrays = {"pos": state.pos, "rng": state.rng, "counters": state.counters,
-                  "energy": np.float64(state.energy)}
+        arrays = state_arrays(state)
         arrays.update({f"trace_{k}": np.asarray(v) for k, v in traces.items()})
         if best_pos is not None:
             arrays["best_pos"] = best_pos
             arrays["best_energy"] = np.float64(best_energy)
         meta = dict(expected, step=step, n_steps=len(steps), done=done, wall=clock.wall(),
                     cpu=clock.cpu(), stage_epsilon=stage_eps, best_stage=best_stage,
-                    seconds_to_target=hit[0], cpu_seconds_to_target=hit[1])
+                    seconds_to_target=hit[0], cpu_seconds_to_target=hit[1],
+                    params=state.params.as_dict(), e_ref=e_ref, cap=cap)
         p = save_checkpoint(ck.path, arrays, meta)
         ck.written()
         return p
@@ -468,32 +670,56 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
     ran = 0
     for i in range(step0, len(steps)):
         s = steps[i]
-        state.run(s.moves, s.temperature)
+        if s.setup is not None:
+            energy, power, k = s.setup
+            state.reconfigure(stage_params(settings.params, energy, power, state.pos,
+                                           state.closed), seed=seed + TIGHT_SEED_STRIDE * k)
+            e_ref = state.energy / n
+        if s.ratchet and cap is None:
+            cap = float(np.max(state.turning_angles()))
+            state.set_max_turn(cap)
+        temperature = s.temperature if s.t_factor is None else e_ref * s.temperature * s.t_factor
+        peak = abs(state.energy)
+        state.run(s.moves, temperature)
+        resync(state, max(peak, abs(state.energy)))
         done += s.moves
+        if s.ratchet:
+            th = float(np.max(state.turning_angles()))
+            if th < cap:
+                cap = th
+                state.set_max_turn(cap)
         eps = state.epsilon
+        lowest = min(lowest, eps)
         traces["moves"].append(done)
-        traces["temperature"].append(s.temperature)
+        traces["temperature"].append(temperature)
         traces["epsilon"].append(eps)
         traces["seconds"].append(clock.wall())
+        if "excess_length" in traces:
+            traces["excess_length"].append(state.excess_length)
+        if "theta_max" in traces:
+            traces["theta_max"].append(float(np.max(state.turning_angles())))
         if target is not None and hit[0] is None and eps <= target:
             hit = (clock.wall(), clock.cpu())
         if s.last:
             stage_eps[s.stage] = eps
-            if state.energy < best_energy:
-                best_pos, best_energy, best_stage = state.pos.copy(), state.energy, s.stage
+            if state.total_energy < best_energy:
+                best_pos, best_energy, best_stage = (state.pos.copy(), state.total_energy,
+                                                     s.stage)
+        if progress is not None:
+            progress({"replica": replica, "done": done, "total": total, "epsilon": eps,
+                      "best": lowest})
         ran += 1
         if i + 1 < len(steps):
             if stop_after is not None and ran >= stop_after:
                 raise RunStopped(save(i + 1), i + 1, len(steps))
             if ck.due():
                 save(i + 1)
-    check_bookkeeping(state)
+    check_chain(state)
     if ck.path is not None:
         save(len(steps))
     best = state
     if best_pos is not None and best_stage != steps[-1].stage:
-        best = ChainState(best_pos, settings.params, seed=0, closed=settings.closed)
-        best.energy = best_energy
+        best = ChainState(best_pos, state.params, seed=0, ensemble=settings.ensemble)
     return make_result(replica, seed, settings, best, state.acceptance(), traces, clock, hit,
                        stage_epsilon=stage_eps, best_stage=best_stage,
                        resumed_from_step=resumed)

@@ -131,7 +131,7 @@ import math
 import numpy as np
 from numba import njit
 
-from stiffknots.engine.kernel import (
+from stiffknots.engine.prims import (
     C_ACCEPTED,
     C_ENERGY_OK,
     C_TRIED,
@@ -148,11 +148,16 @@ from stiffknots.engine.kernel import (
     I_EMODE,
     I_MODE,
     I_POWER,
-    _cell_update,
+    _axis_dist2,
+    _de3,
     _hash,
-    _joint_energy,
+    _metropolis_jac,
+    _move_scale,
     _next,
+    _rehash,
+    _rodrigues,
     _segment_blocked,
+    _turn_blocked,
 )
 from stiffknots.geometry import seg_dist2
 
@@ -178,13 +183,20 @@ def _commit_end(pos, newpos, count, base, step, top, fpar, head, nxt, prv, bucke
         fpar[F_ZLO] = pos[0, 2]
     for q in range(count):
         v = (n - 2 - q) if top else q
-        h = _hash(
-            np.int64(math.floor(0.5 * (pos[v, 0] + pos[v + 1, 0]) * inv)),
-            np.int64(math.floor(0.5 * (pos[v, 1] + pos[v + 1, 1]) * inv)),
-            np.int64(math.floor(0.5 * (pos[v, 2] + pos[v + 1, 2]) * inv)),
-            mask,
-        )
-        _cell_update(v, h, head, nxt, prv, bucket)
+        _rehash(pos, v, v + 1, inv, mask, head, nxt, prv, bucket)
+
+
+@njit(cache=True, inline="always")
+def _end_params(ipar, fpar, head):
+    """The parameters both end-move kernels read: exclusion mode, energy mode, power and scale,
+    curvature limit, displacement scales, exclusion distances, cell geometry."""
+    l_cap = fpar[F_LCAP]
+    l_min = fpar[F_LMIN]
+    log_span = math.log(l_cap / l_min) if l_cap > l_min else 0.0
+    d = fpar[F_D]
+    w = fpar[F_W]
+    return (ipar[I_MODE], ipar[I_EMODE], ipar[I_POWER], fpar[F_EINV], fpar[F_CMIN], l_cap,
+            log_span, d, d * d, w, w * w, 1.0 / fpar[F_CELL], head.shape[0] - 1)
 
 
 @njit(cache=True, inline="always")
@@ -294,11 +306,8 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
     float : the total change of E_d − F·Δz over the accepted moves.
     """
     n = pos.shape[0]
-    mode = ipar[I_MODE]
-    emode = ipar[I_EMODE]
-    power = ipar[I_POWER]
-    escale = fpar[F_EINV]
-    cmin = fpar[F_CMIN]
+    (mode, emode, power, escale, cmin, l_cap, log_span, d, d2, w, w2, inv,
+     mask) = _end_params(ipar, fpar, head)
     if m_max > n - 4:
         m_max = n - 4
     if m_max > newpos.shape[0] - 2:
@@ -306,15 +315,6 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
     if m_max < 1:
         return 0.0
     phi_max = fpar[F_PHIMAX]
-    l_cap = fpar[F_LCAP]
-    l_min = fpar[F_LMIN]
-    log_span = math.log(l_cap / l_min) if l_cap > l_min else 0.0
-    d = fpar[F_D]
-    d2 = d * d
-    w = fpar[F_W]
-    w2 = w * w
-    inv = 1.0 / fpar[F_CELL]
-    mask = head.shape[0] - 1
     beta = 1.0 / temperature if temperature > 0.0 else 0.0
     de_total = 0.0
     s0, s1, s2, s3 = rng[0], rng[1], rng[2], rng[3]
@@ -359,16 +359,12 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
         rho2 = 0.0
         for k in range(2, m + 2):
             b = base + k * step
-            rx = pos[b, 0] - jx
-            ry = pos[b, 1] - jy
-            rz = pos[b, 2] - jz
-            t = rx * ex + ry * ey + rz * ez
-            r2 = rx * rx + ry * ry + rz * rz - t * t
+            r2 = _axis_dist2(pos[b, 0], pos[b, 1], pos[b, 2], jx, jy, jz, ex, ey, ez)
             if r2 > rho2:
                 rho2 = r2
         rho = math.sqrt(rho2)
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        scale = l_cap * math.exp(-u * log_span)
+        scale = _move_scale(u, l_cap, log_span)
         lim = phi_max
         if rho * lim > scale:
             lim = scale / rho
@@ -379,13 +375,8 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
         oc = 1.0 - c
         for k in range(2, m + 2):
             b = base + k * step
-            rx = pos[b, 0] - jx
-            ry = pos[b, 1] - jy
-            rz = pos[b, 2] - jz
-            t = (rx * ex + ry * ey + rz * ez) * oc
-            newpos[k, 0] = jx + rx * c + (ey * rz - ez * ry) * s + ex * t
-            newpos[k, 1] = jy + ry * c + (ez * rx - ex * rz) * s + ey * t
-            newpos[k, 2] = jz + rz * c + (ex * ry - ey * rx) * s + ez * t
+            newpos[k, 0], newpos[k, 1], newpos[k, 2] = _rodrigues(
+                pos[b, 0], pos[b, 1], pos[b, 2], jx, jy, jz, ex, ey, ez, c, s, oc)
         # re-attach the end segment on the axis, one bond beyond bead k = 2
         rr = newpos[2, 0] * newpos[2, 0] + newpos[2, 1] * newpos[2, 1]
         if rr >= 1.0:
@@ -425,32 +416,16 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
         oldp = (jx - pos[bl, 0]) * fx + (jy - pos[bl, 1]) * fy + (jz - pos[bl, 2]) * fz
         newp = ((jx - newpos[m + 1, 0]) * fx + (jy - newpos[m + 1, 1]) * fy
                 + (jz - newpos[m + 1, 2]) * fz)
-        if cmin > -1.0:
-            if ((h_new < cmin and h_new < h_old) or (new2 < cmin and new2 < old2)
-                    or (newp < cmin and newp < oldp)):
-                continue
-        if emode == 0:
-            de = (h_old - h_new) + (old2 - new2) + (oldp - newp)
-        else:
-            de = (_joint_energy(h_new, emode, power, escale)
-                  - _joint_energy(h_old, emode, power, escale)
-                  + _joint_energy(new2, emode, power, escale)
-                  - _joint_energy(old2, emode, power, escale)
-                  + _joint_energy(newp, emode, power, escale)
-                  - _joint_energy(oldp, emode, power, escale))
+        if cmin > -1.0 and (_turn_blocked(cmin, h_old, h_new)
+                            or _turn_blocked(cmin, old2, new2)
+                            or _turn_blocked(cmin, oldp, newp)):
+            continue
+        de = _de3(h_old, h_new, old2, new2, oldp, newp, emode, power, escale)
         de -= force * sg * dlt
         # Metropolis with the Jacobian h/h' of the re-attachment (module docstring)
-        if beta == 0.0:
-            if de > 0.0:
-                continue
-        elif de > 0.0 or h_new > h_old:
-            x = de * beta - math.log(h_old / h_new)
-            if x > 0.0:
-                if x > 50.0:
-                    continue
-                u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-                if u >= math.exp(-x):
-                    continue
+        ok, s0, s1, s2, s3 = _metropolis_jac(de, beta, h_old, h_new, s0, s1, s2, s3)
+        if not ok:
+            continue
         cnt[C_ENERGY_OK + cls] += 1
         # ---- strand-passage guard and exclusion ----------------------------------------
         lrot = abs(phi) * rho
@@ -576,26 +551,14 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
     float : the total change of E_d − F·Δz over the accepted moves.
     """
     n = pos.shape[0]
-    mode = ipar[I_MODE]
-    emode = ipar[I_EMODE]
-    power = ipar[I_POWER]
-    escale = fpar[F_EINV]
-    cmin = fpar[F_CMIN]
+    (mode, emode, power, escale, cmin, l_cap, log_span, d, d2, w, w2, inv,
+     mask) = _end_params(ipar, fpar, head)
     if m_max > n - 5:
         m_max = n - 5
     if m_max > newpos.shape[0] - 3:
         m_max = newpos.shape[0] - 3
     if m_max < 0:
         return 0.0
-    l_cap = fpar[F_LCAP]
-    l_min = fpar[F_LMIN]
-    log_span = math.log(l_cap / l_min) if l_cap > l_min else 0.0
-    d = fpar[F_D]
-    d2 = d * d
-    w = fpar[F_W]
-    w2 = w * w
-    inv = 1.0 / fpar[F_CELL]
-    mask = head.shape[0] - 1
     beta = 1.0 / temperature if temperature > 0.0 else 0.0
     de_total = 0.0
     s0, s1, s2, s3 = rng[0], rng[1], rng[2], rng[3]
@@ -623,7 +586,7 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
         iq = ip + step  # fixed bead Q
         ir = iq + step  # fixed bead beyond Q
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        scale = l_cap * math.exp(-u * log_span)
+        scale = _move_scale(u, l_cap, log_span)
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
         dlt = (2.0 * u - 1.0) * scale
         qx = pos[iq, 0]
@@ -723,32 +686,16 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
         vz = pos[ir, 2] - qz
         oldq = (qx - pos[ip, 0]) * vx + (qy - pos[ip, 1]) * vy + (qz - pos[ip, 2]) * vz
         newq = (qx - px) * vx + (qy - py) * vy + (qz - pz) * vz
-        if cmin > -1.0:
-            if ((newa < cmin and newa < olda) or (newp < cmin and newp < oldp)
-                    or (newq < cmin and newq < oldq)):
-                continue
-        if emode == 0:
-            de = (olda - newa) + (oldp - newp) + (oldq - newq)
-        else:
-            de = (_joint_energy(newa, emode, power, escale)
-                  - _joint_energy(olda, emode, power, escale)
-                  + _joint_energy(newp, emode, power, escale)
-                  - _joint_energy(oldp, emode, power, escale)
-                  + _joint_energy(newq, emode, power, escale)
-                  - _joint_energy(oldq, emode, power, escale))
+        if cmin > -1.0 and (_turn_blocked(cmin, olda, newa)
+                            or _turn_blocked(cmin, oldp, newp)
+                            or _turn_blocked(cmin, oldq, newq)):
+            continue
+        de = _de3(olda, newa, oldp, newp, oldq, newq, emode, power, escale)
         de -= force * sg * dlt
         # Metropolis with the Jacobian D/D' of the circle (module docstring)
-        if beta == 0.0:
-            if de > 0.0:
-                continue
-        elif de > 0.0 or dn > dd:
-            x = de * beta - math.log(dd / dn)
-            if x > 0.0:
-                if x > 50.0:
-                    continue
-                u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-                if u >= math.exp(-x):
-                    continue
+        ok, s0, s1, s2, s3 = _metropolis_jac(de, beta, dd, dn, s0, s1, s2, s3)
+        if not ok:
+            continue
         cnt[C_ENERGY_OK + cls] += 1
         # ---- strand-passage guard and exclusion ----------------------------------------
         ltr = abs(dlt)

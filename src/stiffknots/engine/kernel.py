@@ -70,8 +70,10 @@ below ``F_CMIN`` *and* lower than before (so a chain that starts above the limit
 approach it). A bend of θ between unit bonds is a circle of radius 1/(2 sin(θ/2)) through
 the three beads, so θ_max ↔ R_min = 1/(2 sin(θ_max/2)).
 
-All functions here see arrays and numbers only (no Python objects) and allocate nothing in the
-loop.
+The shared primitives (generator, cell list, joint energy, Metropolis rule, rotation, guard of one
+segment pair, brute-force checks) live in :mod:`stiffknots.engine.prims`; this module keeps the
+crankshaft move. All functions see arrays and numbers only (no Python objects) and allocate
+nothing in the loop.
 """
 
 from __future__ import annotations
@@ -81,227 +83,49 @@ import math
 import numpy as np
 from numba import njit
 
-from stiffknots.geometry import seg_dist2
-
-# integer parameter slots (``ipar``)
-I_MODE = 0  # 0 = bead, 1 = tube
-I_MMAX = 1  # largest number of beads moved by one crankshaft move (≥ 1)
-I_OPEN = 2  # 0 = closed chain, 1 = open chain with both end segments clamped on the z axis
-I_EMODE = 3  # energy per joint: 0 = bending 1 − cos θ (the paper), 1 = (1 − cos θ)^p
-I_POWER = 4  # the exponent p of energy mode 1
-I_NIPAR = 5
-
-# float parameter slots (``fpar``)
-F_DELTA = 0  # angle of the single-bead move (paper: π/100)
-F_PSINGLE = 1  # probability of a single-bead move
-F_PHIMAX = 2  # largest angle of a multi-bead move
-F_LCAP = 3  # largest displacement of any point in a multi-bead move
-F_D = 4  # bead exclusion distance
-F_W = 5  # tube diameter
-F_CELL = 6  # cell side
-F_LMIN = 7  # smallest displacement scale of a multi-bead move
-F_CMIN = 8  # cos of the largest turning angle allowed at a joint (≤ −1: no limit)
-F_ZLO = 9  # open chains: z of the first bead (bottom of the slab the free beads live in)
-F_ZHI = 10  # open chains: z of the last bead (top of the slab)
-F_EINV = 11  # energy mode 1: (1 − cos θ) is divided by this scale before the power
-F_NFPAR = 12
-
-# counters (``cnt``), per move class: 0 = single bead, 1 = multi-bead
-C_TRIED = 0
-C_ENERGY_OK = 2
-C_ACCEPTED = 4
-C_NCNT = 6
-
-
-@njit(cache=True, inline="always")
-def _hash(ix, iy, iz, mask):
-    return ((ix * 73856093) ^ (iy * 19349663) ^ (iz * 83492791)) & mask
-
-
-@njit(cache=True)
-def cell_build(pos, cell, head, nxt, prv, bucket, is_open=False):
-    """(Re)build the spatial hash of segment midpoints. ``head`` has a power-of-two size.
-
-    Segment v joins beads v and v+1; an open chain has no segment N−1 (its ``bucket`` is −1).
-    """
-    n = pos.shape[0]
-    mask = head.shape[0] - 1
-    inv = 1.0 / cell
-    for h in range(head.shape[0]):
-        head[h] = -1
-    nseg = n
-    if is_open:
-        nseg = n - 1
-        bucket[n - 1] = -1
-        nxt[n - 1] = -1
-        prv[n - 1] = -1
-    for v in range(nseg):
-        w = v + 1
-        if w == n:
-            w = 0
-        mx = 0.5 * (pos[v, 0] + pos[w, 0])
-        my = 0.5 * (pos[v, 1] + pos[w, 1])
-        mz = 0.5 * (pos[v, 2] + pos[w, 2])
-        h = _hash(
-            np.int64(math.floor(mx * inv)),
-            np.int64(math.floor(my * inv)),
-            np.int64(math.floor(mz * inv)),
-            mask,
-        )
-        bucket[v] = h
-        prv[v] = -1
-        nxt[v] = head[h]
-        if head[h] >= 0:
-            prv[head[h]] = v
-        head[h] = v
-
-
-@njit(cache=True, inline="always")
-def _cell_update(v, h, head, nxt, prv, bucket):
-    old = bucket[v]
-    if old == h:
-        return
-    # unlink
-    p = prv[v]
-    q = nxt[v]
-    if p >= 0:
-        nxt[p] = q
-    else:
-        head[old] = q
-    if q >= 0:
-        prv[q] = p
-    # push front
-    bucket[v] = h
-    prv[v] = -1
-    nxt[v] = head[h]
-    if head[h] >= 0:
-        prv[head[h]] = v
-    head[h] = v
-
-
-@njit(cache=True, inline="always")
-def _joint_energy(c, emode, power, escale):
-    """Energy of one joint with c = u_n·u_{n+1}: 1 − c (paper §VII) or ((1 − c)/s)^p."""
-    if emode == 0:
-        return 1.0 - c
-    x = (1.0 - c) / escale
-    if x < 0.0:
-        x = 0.0
-    return x ** power
-
-
-@njit(cache=True)
-def energy_chain(pos, is_open=False, emode=0, power=1, escale=1.0):
-    """Σ_joints f(u_n·u_{n+1}) for a unit-bond chain (f: see the module docstring), C = 1.
-
-    Closed chains have N joints, open chains the N − 2 interior ones (beads 1 … N−2).
-    """
-    n = pos.shape[0]
-    e = 0.0
-    lo = 1 if is_open else 0
-    hi = n - 1 if is_open else n
-    for v in range(lo, hi):
-        a = v - 1 if v > 0 else n - 1
-        b = v + 1 if v < n - 1 else 0
-        ux = pos[v, 0] - pos[a, 0]
-        uy = pos[v, 1] - pos[a, 1]
-        uz = pos[v, 2] - pos[a, 2]
-        wx = pos[b, 0] - pos[v, 0]
-        wy = pos[b, 1] - pos[v, 1]
-        wz = pos[b, 2] - pos[v, 2]
-        e += _joint_energy(ux * wx + uy * wy + uz * wz, emode, power, escale)
-    return e
-
-
-@njit(cache=True)
-def energy_closed(pos):
-    """E_d = Σ_n (1 − u_n·u_{n+1}) for a closed unit-bond chain (paper §VII), C = 1."""
-    return energy_chain(pos, False, 0, 1)
-
-
-@njit(cache=True)
-def turning_cosines(pos, is_open=False):
-    """c_n = u_n·u_{n+1} at every joint (N for closed chains, N − 2 for open ones)."""
-    n = pos.shape[0]
-    lo = 1 if is_open else 0
-    hi = n - 1 if is_open else n
-    out = np.empty(hi - lo)
-    for v in range(lo, hi):
-        a = v - 1 if v > 0 else n - 1
-        b = v + 1 if v < n - 1 else 0
-        out[v - lo] = ((pos[v, 0] - pos[a, 0]) * (pos[b, 0] - pos[v, 0])
-                       + (pos[v, 1] - pos[a, 1]) * (pos[b, 1] - pos[v, 1])
-                       + (pos[v, 2] - pos[a, 2]) * (pos[b, 2] - pos[v, 2]))
-    return out
-
-
-_M64 = 0xFFFFFFFFFFFFFFFF
-
-
-def new_rng_state(seed: int) -> np.ndarray:
-    """xoshiro256+ state (4 × uint64) from an integer seed, expanded with splitmix64."""
-    x = int(seed) & _M64
-    out = np.empty(4, dtype=np.uint64)
-    for q in range(4):
-        x = (x + 0x9E3779B97F4A7C15) & _M64
-        z = x
-        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _M64
-        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _M64
-        out[q] = z ^ (z >> 31)
-    if not out.any():
-        out[0] = 1
-    return out
-
-
-@njit(cache=True, inline="always")
-def _rotl(x, k):
-    return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
-
-
-@njit(cache=True, inline="always")
-def _next(s0, s1, s2, s3):
-    """One step of xoshiro256+ (Blackman & Vigna); returns (uniform in [0, 1), new state)."""
-    r = s0 + s3
-    t = s1 << np.uint64(17)
-    s2 ^= s0
-    s3 ^= s1
-    s1 ^= s2
-    s0 ^= s3
-    s2 ^= t
-    s3 = _rotl(s3, 45)
-    return (r >> np.uint64(11)) * (1.0 / 9007199254740992.0), s0, s1, s2, s3
-
-
-@njit(cache=True)
-def uniforms(rng, n):
-    """``n`` uniforms from the kernel's generator (for tests of the generator)."""
-    out = np.empty(n)
-    s0, s1, s2, s3 = rng[0], rng[1], rng[2], rng[3]
-    for q in range(n):
-        out[q], s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-    rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
-    return out
-
-
-@njit(cache=True, inline="always")
-def _segment_blocked(nax, nay, naz, nbx, nby, nbz, oax, oay, oaz, obx, oby, obz,
-                     mx, my, mz, vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, lim_mid2, w2, lmove):
-    """Does a moved segment (new ends na–nb, old ends oa–ob, new midpoint m) clash with the
-    fixed segment v–w (midpoint mv)? True if the new distance is below the tube diameter, or
-    if d_before + d_after ≤ L (the strand-passage guard of the module docstring)."""
-    ddx = mvx - mx
-    ddy = mvy - my
-    ddz = mvz - mz
-    if ddx * ddx + ddy * ddy + ddz * ddz > lim_mid2:
-        return False  # too far apart for either test to fail
-    dn2 = seg_dist2(nax, nay, naz, nbx, nby, nbz, vx, vy, vz, wx, wy, wz)
-    if dn2 < w2:
-        return True
-    if dn2 <= lmove * lmove:
-        do2 = seg_dist2(oax, oay, oaz, obx, oby, obz, vx, vy, vz, wx, wy, wz)
-        if math.sqrt(do2) + math.sqrt(dn2) <= lmove:
-            return True
-    return False
+from stiffknots.engine.prims import (  # noqa: F401 (re-exported: the kernel's public names)
+    C_ACCEPTED,
+    C_ENERGY_OK,
+    C_NCNT,
+    C_TRIED,
+    F_CELL,
+    F_CMIN,
+    F_D,
+    F_DELTA,
+    F_EINV,
+    F_LCAP,
+    F_LMIN,
+    F_NFPAR,
+    F_PHIMAX,
+    F_PSINGLE,
+    F_W,
+    F_ZHI,
+    F_ZLO,
+    I_EMODE,
+    I_MMAX,
+    I_MODE,
+    I_NIPAR,
+    I_OPEN,
+    I_POWER,
+    _axis_dist2,
+    _de2,
+    _hash,
+    _metropolis,
+    _move_scale,
+    _next,
+    _rehash,
+    _rodrigues,
+    _segment_blocked,
+    _turn_blocked,
+    cell_build,
+    check_state,
+    energy_chain,
+    energy_closed,
+    min_nonadjacent_segment_distance,
+    new_rng_state,
+    turning_cosines,
+    uniforms,
+)
 
 
 @njit(cache=True)
@@ -402,11 +226,7 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             b = j + 1 + q
             if b >= n:
                 b -= n
-            rx = pos[b, 0] - jx
-            ry = pos[b, 1] - jy
-            rz = pos[b, 2] - jz
-            t = rx * ex + ry * ey + rz * ez
-            r2 = rx * rx + ry * ry + rz * rz - t * t
+            r2 = _axis_dist2(pos[b, 0], pos[b, 1], pos[b, 2], jx, jy, jz, ex, ey, ez)
             if r2 > rho2:
                 rho2 = r2
         rho = math.sqrt(rho2) if rho2 > 0.0 else 0.0
@@ -424,7 +244,7 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             # displacement scale log-uniform in [l_min, l_cap]: large moves early, fine
             # ones late (a mixture of symmetric proposals is symmetric)
             u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-            scale = l_cap * math.exp(-u * log_span)
+            scale = _move_scale(u, l_cap, log_span)
             lim = phi_max
             if rho * lim > scale:
                 lim = scale / rho
@@ -439,13 +259,8 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             b = j + 1 + q
             if b >= n:
                 b -= n
-            rx = pos[b, 0] - jx
-            ry = pos[b, 1] - jy
-            rz = pos[b, 2] - jz
-            t = (rx * ex + ry * ey + rz * ez) * oc
-            newpos[q, 0] = jx + rx * c + (ey * rz - ez * ry) * s + ex * t
-            newpos[q, 1] = jy + ry * c + (ez * rx - ex * rz) * s + ey * t
-            newpos[q, 2] = jz + rz * c + (ex * ry - ey * rx) * s + ez * t
+            newpos[q, 0], newpos[q, 1], newpos[q, 2] = _rodrigues(
+                pos[b, 0], pos[b, 1], pos[b, 2], jx, jy, jz, ex, ey, ez, c, s, oc)
         # ---- energy: only the bending angles at the pivots j and k change --------------
         jm = j - 1 if j > 0 else n - 1
         kp = k + 1 if k < n - 1 else 0
@@ -468,26 +283,13 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             + (ky - newpos[m - 1, 1]) * by
             + (kz - newpos[m - 1, 2]) * bz
         )
-        if cmin > -1.0:
-            # curvature limit: no pivot may end beyond θ_max unless it bends less than before
-            if (new1 < cmin and new1 < old1) or (new2 < cmin and new2 < old2):
-                continue
-        if emode == 0:
-            de = (old1 - new1) + (old2 - new2)
-        else:
-            de = (_joint_energy(new1, emode, power, escale)
-                  - _joint_energy(old1, emode, power, escale)
-                  + _joint_energy(new2, emode, power, escale)
-                  - _joint_energy(old2, emode, power, escale))
-        if de > 0.0:
-            if beta == 0.0:
-                continue
-            x = de * beta
-            if x > 50.0:
-                continue
-            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-            if u >= math.exp(-x):
-                continue
+        # curvature limit: no pivot may end beyond θ_max unless it bends less than before
+        if cmin > -1.0 and (_turn_blocked(cmin, old1, new1) or _turn_blocked(cmin, old2, new2)):
+            continue
+        de = _de2(old1, new1, old2, new2, emode, power, escale)
+        ok, s0, s1, s2, s3 = _metropolis(de, beta, s0, s1, s2, s3)
+        if not ok:
+            continue
         cnt[C_ENERGY_OK + cls] += 1
         # ---- exclusion and strand-passage guard ----------------------------------------
         lmove = phi * rho  # largest displacement of any moved point
@@ -631,58 +433,6 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             v = j + q
             if v >= n:
                 v -= n
-            v1 = v + 1 if v < n - 1 else 0
-            h = _hash(
-                np.int64(math.floor(0.5 * (pos[v, 0] + pos[v1, 0]) * inv)),
-                np.int64(math.floor(0.5 * (pos[v, 1] + pos[v1, 1]) * inv)),
-                np.int64(math.floor(0.5 * (pos[v, 2] + pos[v1, 2]) * inv)),
-                mask,
-            )
-            _cell_update(v, h, head, nxt, prv, bucket)
+            _rehash(pos, v, v + 1 if v < n - 1 else 0, inv, mask, head, nxt, prv, bucket)
     rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
     return de_total
-
-
-@njit(cache=True)
-def check_state(pos, mode, d, w, is_open=False):
-    """Brute-force O(N²) check of the exclusion rule; returns the worst violation (≤ 0 is ok).
-
-    bead mode: max over pairs at (cyclic, for closed chains) index distance ≥ 2 of
-    (d − distance); tube mode: max over segment pairs sharing no bead of (w − distance).
-    """
-    n = pos.shape[0]
-    worst = -np.inf
-    if mode == 0:
-        for a in range(n):
-            for b in range(a + 2, n):
-                if a == 0 and b == n - 1 and not is_open:
-                    continue
-                dx = pos[a, 0] - pos[b, 0]
-                dy = pos[a, 1] - pos[b, 1]
-                dz = pos[a, 2] - pos[b, 2]
-                v = d - math.sqrt(dx * dx + dy * dy + dz * dz)
-                if v > worst:
-                    worst = v
-    else:
-        worst = w - min_nonadjacent_segment_distance(pos, is_open)
-    return worst
-
-
-@njit(cache=True)
-def min_nonadjacent_segment_distance(pos, is_open=False):
-    """Minimum distance between segments that share no bead (O(N²)); an open chain has no
-    closing segment N−1 → 0."""
-    n = pos.shape[0]
-    best = np.inf
-    nseg = n - 1 if is_open else n
-    for a in range(nseg):
-        a1 = a + 1 if a < n - 1 else 0
-        for b in range(a + 2, nseg):
-            if a == 0 and b == n - 1:
-                continue
-            b1 = b + 1 if b < n - 1 else 0
-            dd = seg_dist2(pos[a, 0], pos[a, 1], pos[a, 2], pos[a1, 0], pos[a1, 1], pos[a1, 2],
-                           pos[b, 0], pos[b, 1], pos[b, 2], pos[b1, 0], pos[b1, 1], pos[b1, 2])
-            if dd < best:
-                best = dd
-    return math.sqrt(best)

@@ -1,117 +1,37 @@
-"""The Monte Carlo state: a closed chain, its cell list and its move parameters.
+"""The Monte Carlo state: a chain, its cell list and its parameters, in one of three ensembles.
 
-Thin Python layer over :mod:`stiffknots.engine.kernel` (validation here, computation there).
+Thin Python layer over the kernels (validation here, computation there):
+:func:`stiffknots.engine.kernel.run_moves` (crankshafts: closed chains, and the interior of open
+chains whose clamped ends stay fixed) and, in the fixed-force ensemble, the end moves of
+:mod:`stiffknots.engine.force_kernel` (slides and pivots: the ends move along z). The
+crankshafts and the end moves preserve the same fixed-force measure (see the force kernel's
+docstring), and a fixed interleaving of them keeps it stationary; the energy is then
+E = E_d − F·Δz (paper §VIII).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-
 import numpy as np
 
-from stiffknots.engine import kernel as K
+from stiffknots.engine import prims as K
+from stiffknots.engine.force_kernel import run_end_moves, run_slide_moves
+from stiffknots.engine.kernel import run_moves
+from stiffknots.engine.params import (
+    ENERGY_MODELS,
+    EXCLUSION_MODELS,
+    Ensemble,
+    MoveParams,
+    ensemble_of,
+)
 
-EXCLUSION_MODELS = ("bead", "tube")
-ENERGY_MODELS = ("bending", "power")
+__all__ = ["ChainState", "Ensemble", "MoveParams", "acceptance_block", "check_open_clamping"]
+
+END_BLOCK = 2000  # moves per block of the fixed-force interleaving (crankshafts, then end moves)
 
 
-@dataclass(frozen=True)
-class MoveParams:
-    """Parameters of the crankshaft moves and of the exclusion model (units: bond length 1).
-
-    Attributes
-    ----------
-    delta : angle of the paper's single-bead move (±delta), default π/100 (§VII).
-    p_single : probability that a move is the paper's single-bead move.
-    m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
-        multi-bead moves and leaves exactly the paper's move).
-    phi_max : largest rotation angle of a multi-bead move (radians).
-    l_cap, l_min : a multi-bead move first draws a displacement scale ℓ log-uniformly in
-        [l_min, l_cap], then an angle uniform in ±min(phi_max, ℓ/ρ_max), ρ_max the largest
-        distance of a moved bead from the axis; no point moves farther than l_cap.
-    exclusion : ``"bead"`` (no two beads at index distance ≥ 2 closer than ``d``; the paper's
-        rule, d = 1/√2) or ``"tube"`` (no two segments sharing no bead closer than ``w``).
-    d : bead exclusion distance.
-    w : tube diameter (``tube`` model only).
-    energy : ``"bending"`` — the paper's E_d = Σ (1 − cos θ_n) (§VII) — or ``"power"`` —
-        Σ (1 − cos θ_n)^power, whose minimum approaches the smallest achievable largest
-        turning angle as ``power`` grows (the restricted-curvature search, §IX.D).
-    power : exponent of the ``"power"`` energy (integer ≥ 1).
-    energy_scale : the ``"power"`` energy is Σ ((1 − cos θ_n)/energy_scale)^power.
-    max_turn : largest turning angle θ_max allowed at any joint (radians), or None for no
-        limit; with unit bonds it is the curvature limit 1/R, R = 1/(2 sin(θ_max/2)).
-    """
-
-    delta: float = float(np.pi / 100)
-    p_single: float = 0.5
-    m_max: int = 75
-    phi_max: float = 0.6
-    l_cap: float = 0.5
-    l_min: float = 0.03
-    exclusion: str = "bead"
-    d: float = float(1 / np.sqrt(2))
-    w: float = float(1 / np.sqrt(2))
-    energy: str = "bending"
-    power: int = 8
-    energy_scale: float = 1.0
-    max_turn: float | None = None
-
-    def validate(self, n_beads: int) -> None:
-        if self.exclusion not in EXCLUSION_MODELS:
-            raise ValueError(
-                f"unknown exclusion model {self.exclusion!r}; "
-                f"allowed: {', '.join(EXCLUSION_MODELS)}"
-            )
-        if not 0 < self.delta < 0.5:
-            raise ValueError(f"delta must be in (0, 0.5) rad, got {self.delta}")
-        if not 0 <= self.p_single <= 1:
-            raise ValueError(f"p_single must be in [0, 1], got {self.p_single}")
-        if self.m_max < 1:
-            raise ValueError(f"m_max must be ≥ 1, got {self.m_max}")
-        if not 0 < self.l_min <= self.l_cap:
-            raise ValueError(f"need 0 < l_min ≤ l_cap, got {self.l_min}, {self.l_cap}")
-        if not 0 < self.d < 1 or not 0 < self.w < 1:
-            raise ValueError("exclusion distances d and w must lie in (0, 1) bond lengths")
-        if self.energy not in ENERGY_MODELS:
-            raise ValueError(
-                f"unknown energy {self.energy!r}; allowed: {', '.join(ENERGY_MODELS)}"
-            )
-        if int(self.power) != self.power or self.power < 1:
-            raise ValueError(f"power must be an integer ≥ 1, got {self.power}")
-        if not self.energy_scale > 0:
-            raise ValueError(f"energy_scale must be > 0, got {self.energy_scale}")
-        if self.max_turn is not None and not 0 < self.max_turn < np.pi:
-            raise ValueError(f"max_turn must be in (0, π) radians or None, got {self.max_turn}")
-        if n_beads < 8:
-            raise ValueError(f"a chain needs at least 8 beads, got {n_beads}")
-
-    def as_dict(self) -> dict:
-        return asdict(self)
-
-    @property
-    def cell(self) -> float:
-        """Cell side: the reach of the single-bead move's checks (see kernel docstring)."""
-        wt = self.w if self.exclusion == "tube" else 0.0
-        return max(1.5 + max(wt, self.delta), self.d + 0.5)
-
-    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        ip = np.zeros(K.I_NIPAR, dtype=np.int64)
-        fp = np.zeros(K.F_NFPAR, dtype=np.float64)
-        ip[K.I_MODE] = EXCLUSION_MODELS.index(self.exclusion)
-        ip[K.I_MMAX] = self.m_max
-        fp[K.F_DELTA] = self.delta
-        fp[K.F_PSINGLE] = self.p_single if self.m_max > 1 else 1.0
-        fp[K.F_PHIMAX] = self.phi_max
-        fp[K.F_LCAP] = self.l_cap
-        fp[K.F_LMIN] = self.l_min
-        fp[K.F_D] = self.d
-        fp[K.F_W] = self.w if self.exclusion == "tube" else 0.0
-        fp[K.F_CELL] = self.cell
-        ip[K.I_EMODE] = ENERGY_MODELS.index(self.energy)
-        ip[K.I_POWER] = int(self.power)
-        fp[K.F_EINV] = float(self.energy_scale)
-        fp[K.F_CMIN] = -2.0 if self.max_turn is None else float(np.cos(self.max_turn))
-        return ip, fp
+def _split(total: int, parts: int) -> list[int]:
+    q, r = divmod(int(total), parts)
+    return [q + (1 if c < r else 0) for c in range(parts)]
 
 
 def acceptance_block(counters: np.ndarray, cls: int) -> dict:
@@ -142,25 +62,35 @@ def check_open_clamping(pos: np.ndarray, tol: float = 1e-9) -> tuple[float, floa
 
 
 class ChainState:
-    """A unit-bond chain prepared for the kernel.
+    """A unit-bond chain prepared for the kernels.
 
     Parameters
     ----------
     coords : (N, 3) chain with unit bonds that satisfies the exclusion model.
     params : move, exclusion and energy parameters.
-    seed : seed of the kernel's generator.
-    closed : False for an open chain clamped on the z axis (see :func:`check_open_clamping`;
-        the excess length L_e = (N−1) − Δz is then fixed, paper §VIII).
+    seed : seed of the kernels' generator (one generator for every move type).
+    ensemble : :class:`Ensemble` or its kind: ``"closed"`` (default), ``"extension"`` (an open
+        chain clamped on the z axis, see :func:`check_open_clamping`; the excess length
+        L_e = (N−1) − Δz is fixed, paper §VIII) or ``"force"`` (the ends slide along z under
+        ``ensemble.force``).
+    closed : shorthand of older code: ``closed=False`` means ``ensemble="extension"``.
+
+    Attributes
+    ----------
+    energy : E_d (incremental, in the state's energy mode).
+    total_energy : E_d − F·Δz in the fixed-force ensemble (incremental); E_d otherwise.
     """
 
     def __init__(self, coords: np.ndarray, params: MoveParams | None = None, seed: int = 0,
-                 closed: bool = True):
+                 closed: bool | None = None, ensemble: Ensemble | str | None = None):
         pos = np.array(coords, dtype=np.float64, order="C", copy=True)
         if pos.ndim != 2 or pos.shape[1] != 3:
             raise ValueError(f"coords must have shape (N, 3), got {pos.shape}")
+        self.ensemble = ensemble_of(ensemble, closed)
+        self.ensemble.validate()
+        self.closed = self.ensemble.closed
         self.params = params or MoveParams()
         self.params.validate(pos.shape[0])
-        self.closed = bool(closed)
         if self.closed:
             bonds = np.linalg.norm(np.roll(pos, -1, axis=0) - pos, axis=1)
         else:
@@ -171,33 +101,73 @@ class ChainState:
                 "use an embedding from stiffknots.knots"
             )
         self.pos = pos
-        self.ipar, self.fpar = self.params.arrays()
-        if not self.closed:
-            zlo, zhi = check_open_clamping(pos)
-            self.ipar[K.I_OPEN] = 1
-            self.fpar[K.F_ZLO] = zlo
-            self.fpar[K.F_ZHI] = zhi
         n = pos.shape[0]
         size = 1 << max(10, int(np.ceil(np.log2(8 * n))))
         self.head = np.empty(size, dtype=np.int64)
         self.nxt = np.empty(n, dtype=np.int64)
         self.prv = np.empty(n, dtype=np.int64)
         self.bucket = np.empty(n, dtype=np.int64)
-        self.newpos = np.empty((max(2, self.params.m_max), 3), dtype=np.float64)
         self.counters = np.zeros(K.C_NCNT, dtype=np.int64)
+        self.end_counters = np.zeros(K.C_NCNT, dtype=np.int64)
+        self.slide_counters = np.zeros(K.C_NCNT, dtype=np.int64)
         self.rng = K.new_rng_state(seed)
-        K.cell_build(self.pos, self.params.cell, self.head, self.nxt, self.prv, self.bucket,
-                     not self.closed)
-        self.energy = self.recomputed_energy()
+        self._configure(self.params)
         viol = self.violation()
         if viol > 1e-12:
             raise ValueError(
                 f"the chain violates the {self.params.exclusion} exclusion rule by {viol:.3g}"
             )
 
+    def _configure(self, params: MoveParams) -> None:
+        """Pack ``params`` for the kernels, size the scratch space, build the cell list and
+        recompute the energy from scratch."""
+        self.params = params
+        self.ipar, self.fpar = params.arrays()
+        if not self.closed:
+            zlo, zhi = check_open_clamping(self.pos)
+            self.ipar[K.I_OPEN] = 1
+            self.fpar[K.F_ZLO] = zlo
+            self.fpar[K.F_ZHI] = zhi
+        n = self.n_beads
+        rows = max(2, params.m_max)
+        if self.ensemble.kind == "force":
+            e = self.ensemble
+            self.slide_m_max = n - 5 if e.slide_m_max is None else int(e.slide_m_max)
+            rows = max(rows, e.end_m_max + 2, min(self.slide_m_max, n) + 3)
+        self.newpos = np.empty((rows, 3), dtype=np.float64)
+        K.cell_build(self.pos, params.cell, self.head, self.nxt, self.prv, self.bucket,
+                     not self.closed)
+        self.energy = self.recomputed_energy()
+        self.total_energy = self.energy - self.force * self.extension
+
+    def reconfigure(self, params: MoveParams, seed: int | None = None) -> None:
+        """Continue from the current chain with new parameters (e.g. another energy mode): the
+        energy is recomputed from scratch, the counters are reset and, if ``seed`` is given,
+        the generator is re-seeded."""
+        params.validate(self.n_beads)
+        self._configure(params)
+        for c in (self.counters, self.end_counters, self.slide_counters):
+            c[:] = 0
+        if seed is not None:
+            self.rng[:] = K.new_rng_state(seed)
+
+    # -- observables -------------------------------------------------------------------------
+
     @property
     def n_beads(self) -> int:
         return self.pos.shape[0]
+
+    @property
+    def force(self) -> float:
+        """F in C/b² (0 outside the fixed-force ensemble)."""
+        return float(self.ensemble.force) if self.ensemble.kind == "force" else 0.0
+
+    @property
+    def extension(self) -> float:
+        """Δz = z_{N−1} − z_0 of an open chain (0 if closed)."""
+        if self.closed:
+            return 0.0
+        return float(self.pos[-1, 2] - self.pos[0, 2])
 
     @property
     def epsilon(self) -> float:
@@ -219,21 +189,18 @@ class ChainState:
         c = K.turning_cosines(self.pos, not self.closed)
         return np.arccos(np.clip(c, -1.0, 1.0))
 
-    def run(self, n_moves: int, temperature: float) -> float:
-        """Attempt ``n_moves`` moves at ``temperature``; returns the energy change."""
-        de = K.run_moves(self.pos, int(n_moves), float(temperature), self.ipar, self.fpar,
-                         self.head, self.nxt, self.prv, self.bucket, self.newpos, self.counters,
-                         self.rng)
-        self.energy += de
-        return de
-
     def recomputed_energy(self) -> float:
         """The energy recomputed from scratch (to compare with the incremental one)."""
         p = self.params
         return float(K.energy_chain(self.pos, not self.closed, ENERGY_MODELS.index(p.energy),
                                     int(p.power), float(p.energy_scale)))
 
+    def recomputed_total(self) -> float:
+        """E_d − F·Δz recomputed from scratch (E_d outside the fixed-force ensemble)."""
+        return self.recomputed_energy() - self.force * self.extension
+
     def violation(self) -> float:
+        """Worst violation of the exclusion rule (≤ 0: none), brute force."""
         p = self.params
         mode = EXCLUSION_MODELS.index(p.exclusion)
         return float(K.check_state(self.pos, mode, p.d, p.w, not self.closed))
@@ -242,6 +209,75 @@ class ChainState:
         """Change the curvature limit θ_max of the running state (None: no limit)."""
         self.fpar[K.F_CMIN] = -2.0 if theta is None else float(np.cos(theta))
 
+    @property
+    def max_turn(self) -> float | None:
+        """The current curvature limit θ_max (None: no limit)."""
+        c = float(self.fpar[K.F_CMIN])
+        return None if c < -1.0 else float(np.arccos(c))
+
     def acceptance(self) -> dict:
-        return {name: acceptance_block(self.counters, cls)
-                for cls, name in ((0, "single"), (1, "multi"))}
+        out = {name: acceptance_block(self.counters, cls)
+               for cls, name in ((0, "single"), (1, "multi"))}
+        if self.ensemble.kind == "force":
+            for c, cls, name in ((self.end_counters, 0, "pivot_top"),
+                                 (self.end_counters, 1, "pivot_bottom"),
+                                 (self.slide_counters, 0, "slide_top"),
+                                 (self.slide_counters, 1, "slide_bottom")):
+                out[name] = acceptance_block(c, cls)
+        return out
+
+    # -- moves -------------------------------------------------------------------------------
+
+    def run_crankshafts(self, n_moves: int, temperature: float) -> float:
+        """Crankshaft moves only (an open chain's ends stay fixed); returns ΔE_d."""
+        de = run_moves(self.pos, int(n_moves), float(temperature), self.ipar, self.fpar,
+                       self.head, self.nxt, self.prv, self.bucket, self.newpos, self.counters,
+                       self.rng)
+        self.energy += de
+        self.total_energy += de
+        return de
+
+    def _run_end_kernel(self, kernel, m_max: int, counters: np.ndarray, n_moves: int,
+                        temperature: float) -> float:
+        z0 = self.extension
+        de = kernel(self.pos, int(n_moves), float(temperature), self.force, m_max, self.ipar,
+                    self.fpar, self.head, self.nxt, self.prv, self.bucket, self.newpos,
+                    counters, self.rng)
+        self.total_energy += de
+        self.energy += de + self.force * (self.extension - z0)
+        return de
+
+    def run_ends(self, n_moves: int, temperature: float) -> float:
+        """Pivot end moves only (fixed-force ensemble); returns Δ(E_d − F·Δz)."""
+        return self._run_end_kernel(run_end_moves, self.ensemble.end_m_max, self.end_counters,
+                                    n_moves, temperature)
+
+    def run_slides(self, n_moves: int, temperature: float) -> float:
+        """Slide moves only (fixed-force ensemble); returns Δ(E_d − F·Δz)."""
+        return self._run_end_kernel(run_slide_moves, self.slide_m_max, self.slide_counters,
+                                    n_moves, temperature)
+
+    def run(self, n_moves: int, temperature: float) -> float:
+        """Attempt ``n_moves`` moves at ``temperature``; returns the change of the total energy.
+
+        Closed chains and fixed extension: crankshafts. Fixed force: a fraction
+        ``end_fraction`` of the moves are end moves (slides and pivots), interleaved with the
+        crankshafts in blocks of ≈ END_BLOCK moves.
+        """
+        if self.ensemble.kind != "force":
+            return self.run_crankshafts(n_moves, temperature)
+        e = self.ensemble
+        n_moves = int(n_moves)
+        n_end = int(round(n_moves * e.end_fraction))
+        n_slide = int(round(n_end * e.slide_fraction))
+        blocks = max(1, -(-n_moves // END_BLOCK))
+        de = 0.0
+        for nc, ns, ne in zip(_split(n_moves - n_end, blocks), _split(n_slide, blocks),
+                              _split(n_end - n_slide, blocks), strict=True):
+            if nc:
+                de += self.run_crankshafts(nc, temperature)
+            if ns:
+                de += self.run_slides(ns, temperature)
+            if ne:
+                de += self.run_ends(ne, temperature)
+        return de

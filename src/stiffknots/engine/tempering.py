@@ -31,23 +31,28 @@ from pathlib import Path
 
 import numpy as np
 
-from stiffknots.engine import kernel as K
+from stiffknots.engine import prims as K
 from stiffknots.engine.driver import (
     TRACE_KEYS,
     AnnealSettings,
     Checkpointer,
     Clock,
     ReplicaResult,
-    RunStopped,
-    check_bookkeeping,
+    check_chain,
     check_resumable,
     load_checkpoint,
     make_result,
     restore_state,
+    resync,
     run_meta,
     save_checkpoint,
+    state_arrays,
 )
 from stiffknots.engine.state import ChainState
+from stiffknots.errors import RunStopped
+
+_STATE_KEYS = ("pos", "rng", "counters", "end_counters", "slide_counters", "energy",
+               "total_energy")
 
 
 def swap_probability(t_cold: float, t_hot: float, e_cold: float, e_hot: float) -> float:
@@ -132,8 +137,8 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
     if resume and ck.path is not None and ck.path.exists():
         arrays, meta = load_checkpoint(ck.path)
         check_resumable(meta, expected, ck.path)
-        states = [restore_state(arrays["pos"][k], arrays["rng"][k], arrays["counters"][k],
-                                float(arrays["energy"][k]), settings) for k in range(kk)]
+        states = [restore_state({key: v[k] for key, v in arrays.items()
+                                 if key in _STATE_KEYS}, settings) for k in range(kk)]
         swap_rng = np.asarray(arrays["swap_rng"], dtype=np.uint64).copy()
         tried = arrays["swap_tried"].astype(np.int64)
         accepted = arrays["swap_accepted"].astype(np.int64)
@@ -144,19 +149,15 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
         clock = Clock(meta["wall"], meta["cpu"])
         resumed = step0
     else:
-        states = [ChainState(coords, settings.params, seed=seeds[k], closed=settings.closed)
+        states = [ChainState(coords, settings.params, seed=seeds[k], ensemble=settings.ensemble)
                   for k in range(kk)]
     target = settings.target_epsilon
 
     def save(step: int) -> Path:
-        arrays = {
-            "pos": np.stack([s.pos for s in states]),
-            "rng": np.stack([s.rng for s in states]),
-            "counters": np.stack([s.counters for s in states]),
-            "energy": np.array([s.energy for s in states], dtype=np.float64),
-            "swap_rng": swap_rng, "swap_tried": tried, "swap_accepted": accepted,
-            "order": order,
-        }
+        per_copy = [state_arrays(s) for s in states]
+        arrays = {key: np.stack([a[key] for a in per_copy]) for key in _STATE_KEYS}
+        arrays.update({"swap_rng": swap_rng, "swap_tried": tried, "swap_accepted": accepted,
+                       "order": order})
         arrays.update({f"trace_{k}": np.asarray(v) for k, v in traces.items()})
         meta = dict(expected, step=step, n_steps=n_steps, done=done, chosen=chosen,
                     wall=clock.wall(), cpu=clock.cpu(), seconds_to_target=hit[0],
@@ -178,7 +179,9 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
     for i in range(step0, n_steps):
         if i < rounds:
             for k in range(kk):
+                peak = abs(states[k].energy)
                 states[k].run(per, float(temps[k]))
+                resync(states[k], max(peak, abs(states[k].energy)))
             done += per * kk
             attempt_swaps(states, temps, i % 2, swap_rng, tried, accepted, order)
             record(float(temps[0]), min(s.epsilon for s in states))
@@ -186,7 +189,9 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
             if chosen < 0:
                 chosen = int(np.argmin([s.energy for s in states]))
             s = states[chosen]
+            peak = abs(s.energy)
             s.run(quench[i - rounds], 0.0)
+            resync(s, max(peak, abs(s.energy)))
             done += quench[i - rounds]
             record(0.0, s.epsilon)
         ran += 1
@@ -196,7 +201,7 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
             if ck.due():
                 save(i + 1)
     for s in states:
-        check_bookkeeping(s)
+        check_chain(s)
     if chosen < 0:
         chosen = int(np.argmin([s.energy for s in states]))
     if ck.path is not None:

@@ -36,6 +36,8 @@ import re
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from stiffknots.errors import UnknownKnotError
+
 __all__ = [
     "Knot",
     "UnknownKnotError",
@@ -86,13 +88,6 @@ _ALIASES = {
     "stevedore": "6_1",
     "stevedoreknot": "6_1",
 }
-
-
-class UnknownKnotError(ValueError):
-    """A knot name that is not in the catalogue (or not a knot at all).
-
-    The message says what was wrong and lists the closest valid names.
-    """
 
 
 @dataclass(frozen=True)

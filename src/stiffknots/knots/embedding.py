@@ -51,6 +51,7 @@ import numpy as np
 from numba import njit
 from scipy.optimize import brentq
 
+from stiffknots.errors import EmbeddingError
 from stiffknots.geometry import seg_dist2
 
 __all__ = [
@@ -68,10 +69,6 @@ __all__ = [
 D_MIN = 1.0 / np.sqrt(2.0)
 DEFAULT_GAP = 1.1
 _MAX_BEADS = 20000
-
-
-class EmbeddingError(ValueError):
-    """A braid word cannot be embedded with the requested parameters (message says why)."""
 
 
 # --------------------------------------------------------------------------------------------

@@ -59,6 +59,8 @@ import threading
 
 import numpy as np
 
+from stiffknots.errors import IdentificationError
+
 __all__ = [
     "IdentificationError",
     "identify",
@@ -73,10 +75,6 @@ __all__ = [
 # exponentially with the crossings of the reduced diagram
 _MAX_CROSS = 60
 _LOCK = threading.Lock()
-
-
-class IdentificationError(RuntimeError):
-    """The invariant could not be computed (e.g. far too many crossings even after reduction)."""
 
 
 # --------------------------------------------------------------------------------------------

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from stiffknots.knots.embedding import D_MIN, EmbeddingError, embed_braid
+from stiffknots.measures import min_bead_distance
 
 
 def _rotation_to_z(t: np.ndarray) -> np.ndarray:
@@ -130,7 +131,6 @@ def embed_open(word, n_strands: int | None = None, n_knot_beads: int = 60, *, ar
     -------
     (N, 3) open chain; bonds are unit, beads 0, 1, N−2, N−1 on the z axis.
     """
-    from stiffknots.engine.kernel import check_state
     from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
 
     x = embed_braid(word, n_strands, n_beads=int(n_knot_beads), d_min=d_min, seed=seed)
@@ -141,7 +141,7 @@ def embed_open(word, n_strands: int | None = None, n_knot_beads: int = 60, *, ar
         except EmbeddingError as exc:
             last_error = str(exc)
             break
-        if check_state(pts, 0, d_min, 0.0, True) > 1e-12:
+        if d_min - min_bead_distance(pts, False, 2) > 1e-12:
             last_error = f"cut {cut} violates the bead exclusion"
             continue
         if expected is not None:
@@ -151,3 +151,25 @@ def embed_open(word, n_strands: int | None = None, n_knot_beads: int = 60, *, ar
                 continue
         return pts
     raise EmbeddingError(f"could not open the chain with straight ends along z: {last_error}")
+
+
+def pad_open_chain(coords: np.ndarray, n_beads: int) -> np.ndarray:
+    """Lengthen both straight ends of an open chain along the z axis to ``n_beads`` beads.
+
+    The added beads continue the clamped end segments (unit bonds on the axis), so the closure
+    along z, the excess length and the energy are unchanged; bead 0 is put at z = 0.
+    """
+    x = np.asarray(coords, dtype=float)
+    extra = int(n_beads) - len(x)
+    if extra < 0:
+        raise ValueError(f"the starting chain has {len(x)} beads, more than n_beads={n_beads}; "
+                         "raise n_beads or lower the starting excess length")
+    lo, hi = extra // 2, extra - extra // 2
+    below = np.zeros((lo, 3))
+    below[:, 2] = x[0, 2] - np.arange(lo, 0, -1)
+    above = np.zeros((hi, 3))
+    above[:, 2] = x[-1, 2] + np.arange(1, hi + 1)
+    out = np.vstack([below, x, above])
+    out[:, 2] -= out[0, 2]
+    out[[0, 1, -2, -1], :2] = 0.0
+    return out

@@ -16,15 +16,21 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
+from stiffknots.fileio import atomic_path
 from stiffknots.theory.bounds import closed_bounds, open_bounds  # noqa: E402
-from stiffknots.theory.elastica import elastica_constants  # noqa: E402
+from stiffknots.theory.elastica import (  # noqa: E402
+    eight_curve,
+    eighty_curve,
+    elastica_constants,
+    loop_curve,
+)
 
 __all__ = [
     "SHAPE_STYLES",
@@ -71,9 +77,16 @@ def shape_style(shape: str | None, _extra: dict | None = None) -> tuple[str, str
     return _extra[key]
 
 
+def new_figure(figsize=(6.0, 4.5), layout: str | None = "constrained") -> Figure:
+    """A matplotlib Figure on the Agg canvas (no pyplot: no global state, no backend change)."""
+    fig = Figure(figsize=figsize, layout=layout)
+    FigureCanvasAgg(fig)
+    return fig
+
+
 def _new_ax(ax, figsize=(6.0, 4.5)):
     if ax is None:
-        fig, ax = plt.subplots(figsize=figsize, layout="constrained")
+        ax = new_figure(figsize).subplots()
     return ax
 
 
@@ -142,7 +155,7 @@ def plot_annealing_curves(traces, ax=None, *, labels: Sequence[str] | None = Non
         raise ValueError("no traces to plot")
     ax = _new_ax(ax)
     tax = ax.twinx()
-    colours = plt.get_cmap("tab10")
+    colours = matplotlib.colormaps["tab10"]
     quench_start = None
     for k, tr in enumerate(traces):
         m = np.asarray(_field(tr, "moves"), dtype=float)
@@ -374,7 +387,7 @@ def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
             raise ValueError(f"point {k} ({p['knot']}): L_e must be > 0, got {p['L_e']}")
     inv = [1.0 / float(p["L_e"]) ** 2 for p in pts]
     x_max = 1.1 * max(inv, default=1.0)
-    colours = plt.get_cmap("tab10")
+    colours = matplotlib.colormaps["tab10"]
     pairs = sorted({(int(p["n"]), None if p.get("i") is None else int(p["i"])) for p in pts},
                    key=lambda t: (t[0], -1 if t[1] is None else t[1]))
     colour_of = {pair: colours(k % 10) for k, pair in enumerate(pairs)}
@@ -442,7 +455,87 @@ def save_figure(fig_or_ax, path, *, dpi: int = 120, close: bool = True) -> Path:
         raise ValueError(f"expected a matplotlib Figure or Axes, got {type(fig_or_ax).__name__}")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi, facecolor="white")
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, facecolor="white", format=path.suffix.lstrip(".") or "png")
     if close:
-        plt.close(fig)
+        fig.clear()
     return path
+
+
+def plot_elastica(path: str | None = None, *, axes: Sequence[Any] | None = None,
+                  n_points: int = 800, dpi: int = 150) -> Any:
+    """Draw the loop, the 8 and the 80 in three panels, with their energies in the titles.
+
+    Uses matplotlib's object API with the Agg canvas (no pyplot, no global backend change).
+
+    Parameters
+    ----------
+    path : str, optional
+        Write a PNG there.
+    axes : sequence of three matplotlib Axes, optional
+        Draw into these instead of a new figure.
+    n_points : int
+        Points per curve.
+    dpi : int
+        Resolution of the PNG.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    c = elastica_constants()
+    if axes is None:
+        fig = new_figure(figsize=(11.0, 4.0))
+        axes = fig.subplots(1, 3)
+    else:
+        fig = axes[0].figure
+    loop = loop_curve(n_points)
+    eight = eight_curve(n_points)
+    e8, e0 = eighty_curve(n_points, split=True)
+    colour, colour2 = "#1f4e79", "#c0504d"
+    panels = [
+        (axes[0], [(loop, colour)], rf"loop: $\epsilon_{{loop}}$ = {c.eps_loop:.4f}",
+         [loop[0]]),
+        (axes[1], [(eight, colour)], rf"8: $\epsilon_8$ = {c.eps_8:.4f}", []),
+        (axes[2], [(e8, colour), (e0, colour2)],
+         rf"80: $\epsilon_{{80}}$ = {c.eps_80:.3f}", [e8[0]]),
+    ]
+    for ax, curves, title, dots in panels:
+        for pts, col in curves:
+            ax.plot(pts[:, 0], pts[:, 1], color=col, lw=2.0, solid_capstyle="round")
+        for d in dots:
+            ax.plot([d[0]], [d[1]], "o", color="black", ms=4, zorder=3)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(title, fontsize=11)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        for side in ax.spines.values():
+            side.set_visible(False)
+        ax.margins(0.08)
+    if path is not None:
+        save_figure(fig, path, dpi=dpi, close=False)
+    return fig
+
+
+def plot_open_trend(points: Sequence[Mapping], fit: Mapping, ax=None, *,
+                    label: str = "annealed open trefoil"):
+    """ε_e against 1/√L_e with the fit ε_∞ + a/√L_e and the thin limit 2π² (§VIII).
+
+    ``points``: dicts with ``excess_length`` and ``eps_e``; ``fit``: ``eps_inf`` and ``a``.
+    """
+    ax = _new_ax(ax, (6, 4.2))
+    x = np.array([1 / np.sqrt(p["excess_length"]) for p in points])
+    y = np.array([p["eps_e"] for p in points])
+    ax.plot(x, y, "o", color="C0", label=label)
+    xx = np.linspace(0, x.max() * 1.05, 50)
+    ax.plot(xx, fit["eps_inf"] + fit["a"] * xx, "-", color="C0", lw=1,
+            label=f"fit ε_∞ + a/√L_e, ε_∞ = {fit['eps_inf']:.2f}")
+    ax.axhline(2 * math.pi**2, color="k", ls="--", lw=1, label="2π² (thin limit, §VIII)")
+    for p, xi, yi in zip(points, x, y, strict=True):
+        ax.annotate(f"L_e={p['excess_length']:.0f}", (xi, yi), textcoords="offset points",
+                    xytext=(4, 4), fontsize=7)
+    ax.set_xlabel("1/√L_e  (bond lengths^-½)")
+    ax.set_ylabel("ε_e = E L_e / C")
+    ax.set_xlim(0, None)
+    ax.legend(fontsize=8)
+    return ax

@@ -32,13 +32,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.colors as mcolors  # noqa: E402
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.colors as mcolors
 import numpy as np  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import proj3d  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection  # noqa: E402
+
+from stiffknots.fileio import atomic_path
 
 __all__ = [
     "DEFAULT_RADIUS",
@@ -439,7 +440,8 @@ def plot_tube(coords, ax=None, *, closed: bool | None = None, radius: float | No
     mesh = tube_mesh(x, r, closed=closed, n_sides=n_sides)
 
     if ax is None:
-        fig = plt.figure(figsize=(5, 5))
+        fig = Figure(figsize=(5, 5))
+        FigureCanvasAgg(fig)
         ax = fig.add_axes((0.0, 0.0, 1.0, 0.94 if title else 1.0), projection="3d")
     if not hasattr(ax, "get_zlim"):
         raise ValueError("ax must be a 3D axis (projection='3d')")
@@ -449,7 +451,8 @@ def plot_tube(coords, ax=None, *, closed: bool | None = None, radius: float | No
     if color is not None:
         base = np.tile(np.array(mcolors.to_rgba(color)), (len(mesh.quads), 1))
     else:
-        cm = plt.get_cmap(cmap if cmap is not None else (_CYCLIC if closed else _LINEAR))
+        cm = matplotlib.colormaps.get_cmap(
+            cmap if cmap is not None else (_CYCLIC if closed else _LINEAR))
         tpar = (np.arange(n_faces_ring) + 0.5) / (n if closed else n - 1)
         if not closed and cmap is None:
             tpar = 0.1 + 0.8 * tpar  # stay off viridis' darkest and lightest ends
@@ -561,13 +564,15 @@ def save_chain_png(coords, path, *, title: str | None = None, closed: bool | Non
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig = plt.figure(figsize=(size, size))
+    fig = Figure(figsize=(size, size))
+    FigureCanvasAgg(fig)
     try:
         ax = fig.add_axes((0.0, 0.0, 1.0, 0.93 if title else 1.0), projection="3d")
         plot_tube(coords, ax, closed=closed, **kwargs)
         if title:
             fig.suptitle(title, fontsize=11, y=0.975)
-        fig.savefig(path, dpi=dpi, facecolor="white")
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, facecolor="white", format=path.suffix.lstrip(".") or "png")
     finally:
-        plt.close(fig)
+        fig.clear()
     return path

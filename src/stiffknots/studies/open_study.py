@@ -49,38 +49,22 @@ def fit_thin_limit(les, eps) -> dict:
 
 
 def _plot_trend(points, fit, path):
-    import matplotlib.pyplot as plt
+    from stiffknots.report.figures import plot_open_trend, save_figure
 
-    from stiffknots.report.figures import save_figure
-
-    fig, ax = plt.subplots(figsize=(6, 4.2))
-    x = np.array([1 / np.sqrt(p["excess_length"]) for p in points])
-    y = np.array([p["eps_e"] for p in points])
-    ax.plot(x, y, "o", color="C0", label="annealed open trefoil (tube w = 0.05)")
-    xx = np.linspace(0, x.max() * 1.05, 50)
-    ax.plot(xx, fit["eps_inf"] + fit["a"] * xx, "-", color="C0", lw=1,
-            label=f"fit ε_∞ + a/√L_e, ε_∞ = {fit['eps_inf']:.2f}")
-    ax.axhline(TWO_PI2, color="k", ls="--", lw=1, label="2π² (thin limit, §VIII)")
-    for p, xi, yi in zip(points, x, y, strict=True):
-        ax.annotate(f"L_e={p['excess_length']:.0f}", (xi, yi), textcoords="offset points",
-                    xytext=(4, 4), fontsize=7)
-    ax.set_xlabel("1/√L_e  (bond lengths^-½)")
-    ax.set_ylabel("ε_e = E L_e / C")
-    ax.set_xlim(0, None)
-    ax.legend(fontsize=8)
-    return save_figure(fig, path)
+    return save_figure(plot_open_trend(points, fit, label="annealed open trefoil (tube w = 0.05)"),
+                       path)
 
 
 def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", seed: int = 0,
                    log: Callable[[str], None] | None = None) -> dict:
     """Run the study on ``budget`` and write the report; returns the summary dict."""
-    from stiffknots.engine.state import MoveParams
+    from stiffknots.engine.params import MoveParams
     from stiffknots.knots.catalogue import get_knot
-    from stiffknots.open_knots import anneal_open, tension_scan
+    from stiffknots.problems.open_extension import anneal_open, tension_scan
+    from stiffknots.problems.tightest import tightest
     from stiffknots.report.document import Document
     from stiffknots.report.figures import plot_tension, save_figure
     from stiffknots.report.render import save_chain_png
-    from stiffknots.tightest import tightest
 
     if budget not in BUDGETS:
         raise ValueError(f"unknown budget {budget!r}; allowed: {', '.join(BUDGETS)}")

@@ -60,10 +60,10 @@ def _compare(state: dict) -> str:
 
 def _anneal_model(name, model, b, seed):
     from stiffknots.analysis import classify, group_states
-    from stiffknots.annealing import anneal
-    from stiffknots.engine.state import MoveParams
+    from stiffknots.engine.params import MoveParams
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.knots.starts import STARTS, available_starts, split_replicas
+    from stiffknots.problems.closed import anneal
 
     params = MoveParams(exclusion=model)
     starts = split_replicas(available_starts(get_knot(name), starts=STARTS), b["replicas"])
@@ -105,10 +105,15 @@ def run_paper(budget: str = "small", out_dir: str | Path = "results/paper", seed
     The summary has, per knot, ``ground`` (``shape``, ``multiplicity``, ``epsilon``, …) and
     ``metastable`` (a list) for the paper's bead rule, and the same under ``tube``.
     """
-    from stiffknots.cli import knot_summary
-    from stiffknots.report.figures import plot_annealing_curves, plot_eps_vs_n2, save_figure
+    from stiffknots.knots.summary import knot_summary
+    from stiffknots.report.figures import (
+        plot_annealing_curves,
+        plot_elastica,
+        plot_eps_vs_n2,
+        save_figure,
+    )
     from stiffknots.report.render import save_chain_png
-    from stiffknots.theory.elastica import elastica_constants, hierarchy, plot_elastica
+    from stiffknots.theory.elastica import elastica_constants, hierarchy
 
     if budget not in BUDGETS:
         raise ValueError(f"unknown budget {budget!r}; allowed: {', '.join(BUDGETS)}")

@@ -33,7 +33,6 @@ from stiffknots.theory.elastica import (
     eps_structure,
     hierarchy,
     loop_curve,
-    plot_elastica,
     solve_eight,
     solve_loop,
 )
@@ -64,7 +63,6 @@ __all__ = [
     "minimize_pbl_arc_ansatz",
     "open_bounds",
     "pbl_arc_length",
-    "plot_elastica",
     "restricted_curvature_bounds",
     "self_consistency_limit",
     "solve_eight",

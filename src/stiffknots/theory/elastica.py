@@ -58,7 +58,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -84,7 +84,6 @@ __all__ = [
     "loop_curve",
     "eight_curve",
     "eighty_curve",
-    "plot_elastica",
 ]
 
 #: Normalized energy of the circle, the ground state of a closed unknotted line (§III, §VI).
@@ -739,62 +738,3 @@ def eighty_curve(n_points: int = 600, *, split: bool = False
     eight = np.vstack([out[on8], out[:1]])
     circle = np.vstack([out[:1], out[~on8]])
     return eight, circle
-
-
-def plot_elastica(path: str | None = None, *, axes: Sequence[Any] | None = None,
-                  n_points: int = 800, dpi: int = 150) -> Any:
-    """Draw the loop, the 8 and the 80 in three panels, with their energies in the titles.
-
-    Uses matplotlib's object API with the Agg canvas (no pyplot, no global backend change).
-
-    Parameters
-    ----------
-    path : str, optional
-        Write a PNG there.
-    axes : sequence of three matplotlib Axes, optional
-        Draw into these instead of a new figure.
-    n_points : int
-        Points per curve.
-    dpi : int
-        Resolution of the PNG.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    c = elastica_constants()
-    if axes is None:
-        fig = Figure(figsize=(11.0, 4.0), layout="constrained")
-        FigureCanvasAgg(fig)
-        axes = fig.subplots(1, 3)
-    else:
-        fig = axes[0].figure
-    loop = loop_curve(n_points)
-    eight = eight_curve(n_points)
-    e8, e0 = eighty_curve(n_points, split=True)
-    colour, colour2 = "#1f4e79", "#c0504d"
-    panels = [
-        (axes[0], [(loop, colour)], rf"loop: $\epsilon_{{loop}}$ = {c.eps_loop:.4f}",
-         [loop[0]]),
-        (axes[1], [(eight, colour)], rf"8: $\epsilon_8$ = {c.eps_8:.4f}", []),
-        (axes[2], [(e8, colour), (e0, colour2)],
-         rf"80: $\epsilon_{{80}}$ = {c.eps_80:.3f}", [e8[0]]),
-    ]
-    for ax, curves, title, dots in panels:
-        for pts, col in curves:
-            ax.plot(pts[:, 0], pts[:, 1], color=col, lw=2.0, solid_capstyle="round")
-        for d in dots:
-            ax.plot([d[0]], [d[1]], "o", color="black", ms=4, zorder=3)
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_title(title, fontsize=11)
-        ax.set_xticks([])
-        ax.set_yticks([])
-        for side in ax.spines.values():
-            side.set_visible(False)
-        ax.margins(0.08)
-    if path is not None:
-        fig.savefig(path, dpi=dpi)
-    return fig

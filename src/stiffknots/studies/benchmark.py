@@ -24,7 +24,8 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from stiffknots.engine.driver import AnnealSettings, run_replica
-from stiffknots.engine.state import ChainState, MoveParams
+from stiffknots.engine.params import MoveParams
+from stiffknots.engine.state import ChainState
 
 TARGETS = {"4_1": 129.6, "3_1": 79.1}
 MEASURE_T = 1e-4

@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 from numba import njit
 
+from helpers import force_state
 from stiffknots.engine import kernel as K
 from stiffknots.engine.force_kernel import run_end_moves, run_slide_moves
-from stiffknots.engine.force_state import ForceChainState
 from stiffknots.engine.state import ChainState, MoveParams, check_open_clamping
 from stiffknots.geometry import seg_dist2
 from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
-from stiffknots.open_knots import open_chain
+from stiffknots.problems.open_extension import open_chain
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +58,7 @@ def _run_kind(st, kind, n, temperature):
 @pytest.mark.parametrize("exclusion", ["bead", "tube"])
 @pytest.mark.parametrize("kind", ["pivot", "slide"])
 def test_end_moves_keep_ends_on_axis_and_bonds(open31, kind, exclusion):
-    st = ForceChainState(open31, MoveParams(exclusion=exclusion), seed=3, force=0.05)
+    st = force_state(open31, MoveParams(exclusion=exclusion), seed=3, force=0.05)
     counters = st.end_counters if kind == "pivot" else st.slide_counters
     for _ in range(10):
         _run_kind(st, kind, 20_000, 0.05)
@@ -71,7 +71,7 @@ def test_end_moves_keep_ends_on_axis_and_bonds(open31, kind, exclusion):
 
 
 def test_cell_list_stays_consistent_with_positions(open31):
-    st = ForceChainState(open31, MoveParams(), seed=4, force=0.05, end_fraction=0.5)
+    st = force_state(open31, MoveParams(), seed=4, force=0.05, end_fraction=0.5)
     st.run(100_000, 0.05)
     head, nxt, prv, bucket = (np.empty_like(a) for a in (st.head, st.nxt, st.prv, st.bucket))
     K.cell_build(st.pos, st.params.cell, head, nxt, prv, bucket, True)
@@ -91,7 +91,7 @@ def test_cell_list_stays_consistent_with_positions(open31):
 
 @pytest.mark.parametrize("kind", ["pivot", "slide"])
 def test_end_moves_change_the_extension(open31, kind):
-    st = ForceChainState(open31, MoveParams(), seed=5, force=0.05)
+    st = force_state(open31, MoveParams(), seed=5, force=0.05)
     z0 = st.extension
     seen = []
     for _ in range(5):
@@ -109,7 +109,7 @@ def test_quench_under_force_stretches_the_chain(open31):
     le0 = rel.excess_length
     out = {}
     for force in (0.5, 1e-4):
-        st = ForceChainState(rel.pos, MoveParams(), seed=6, force=force, end_fraction=0.3)
+        st = force_state(rel.pos, MoveParams(), seed=6, force=force, end_fraction=0.3)
         e0 = st.total_energy
         st.run(300_000, 0.0)
         assert st.total_energy <= e0 + 1e-12  # a quench never goes uphill in E_d − F·Δz
@@ -130,7 +130,7 @@ def test_quench_under_force_stretches_the_chain(open31):
 @pytest.mark.parametrize("kind", ["pivot", "slide", "mixed"])
 def test_energy_bookkeeping_with_force_term(open31, kind):
     force = 0.05
-    st = ForceChainState(open31, MoveParams(), seed=7, force=force, end_fraction=0.5)
+    st = force_state(open31, MoveParams(), seed=7, force=force, end_fraction=0.5)
 
     def total():
         return float(K.energy_chain(st.pos, True)) - force * float(st.pos[-1, 2] - st.pos[0, 2])
@@ -156,7 +156,7 @@ def test_energy_bookkeeping_with_force_term(open31, kind):
 @pytest.mark.parametrize("knot", ["3_1", "4_1"])
 def test_hot_fuzz_keeps_knot_and_exclusion(open31, open41, knot, exclusion):
     x = open31 if knot == "3_1" else open41
-    st = ForceChainState(x, MoveParams(exclusion=exclusion, m_max=30), seed=11, force=0.02,
+    st = force_state(x, MoveParams(exclusion=exclusion, m_max=30), seed=11, force=0.02,
                          end_fraction=0.5)
     for _ in range(6):
         st.run(50_000, 0.5)
@@ -313,7 +313,7 @@ def test_annealed_open_trefoil_balances_the_force():
     # ε_e(L_e) still falls with L_e (23.55 → 22.61 from L_e = 40 to 80, README), so there
     # −dE_d/dL_e > E_d/L_e and the balance is μ/F < 1: not a test of the moves.
     # Measured (seed 0, 60 M moves, ≈ 2 min): L_e = 40.16, ε_e = 21.03, μ/F = 1.003.
-    from stiffknots.open_force import anneal_open_force
+    from stiffknots.problems.open_force import anneal_open_force
 
     force = 0.013
     r = anneal_open_force("3_1", force, moves=60_000_000, replicas=1, seed=0, workers=1,
@@ -329,7 +329,7 @@ def test_annealed_open_trefoil_balances_the_force():
 
 
 def test_anneal_open_force_small_run_is_verified():
-    from stiffknots.open_force import anneal_open_force
+    from stiffknots.problems.open_force import anneal_open_force
 
     r = anneal_open_force("3_1", 0.05, n_beads=80, moves=200_000, replicas=1, seed=1,
                           workers=1)

@@ -47,28 +47,3 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
             f.cancel()
         ex.shutdown(wait=False, cancel_futures=True)
     return results, interrupted
-
-
-class BestFirst:
-    """Mixin for results of independent replicas kept sorted best first (``replicas``)."""
-
-    replicas: list
-
-    @property
-    def best(self):
-        """The best replica (the first); RuntimeError if none finished (e.g. Ctrl-C)."""
-        if not self.replicas:
-            raise RuntimeError("no replica finished")
-        return self.replicas[0]
-
-    def provenance(self) -> dict:
-        """What every replica-set result reports besides its physics: verification, settings,
-        timing and the package version (reproducibility), and each replica's summary."""
-        return {
-            "knot_verified": all(r.knot_verified for r in self.replicas),
-            "settings": self.settings,
-            "wall_time": self.wall_time,
-            "interrupted": self.interrupted,
-            "version": self.version,
-            "replicas": [r.summary() for r in self.replicas],
-        }

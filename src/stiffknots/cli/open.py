@@ -1,5 +1,4 @@
-"""CLI commands for open knots under tension (§VIII) and the restricted-curvature problem
-(§IX.D). Registered on :data:`stiffknots.cli.app`; they only compose the library."""
+"""``stiffknots open``: open knots under tension (§VIII), at fixed extension or fixed force."""
 
 from __future__ import annotations
 
@@ -9,20 +8,9 @@ from typing import Annotated
 
 import typer
 
-from stiffknots.cli import JsonOpt, UserError, _dump, _fmt, app, err, out
+from stiffknots.cli.app import JsonOpt, UserError, dump, err, floats, fmt, out
 
 
-def _floats(text: str, what: str) -> list[float]:
-    try:
-        vals = [float(v) for v in text.replace(";", ",").split(",") if v.strip()]
-    except ValueError:
-        raise UserError(f"{what} must be numbers separated by commas, got {text!r}") from None
-    if not vals:
-        raise UserError(f"{what}: give at least one value")
-    return vals
-
-
-@app.command("open")
 def open_knot(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_1, 5_2 ...")],
     excess_length: Annotated[str | None, typer.Option(
@@ -57,8 +45,8 @@ def open_knot(
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from stiffknots.engine.state import MoveParams
-    from stiffknots.open_knots import anneal_open, excess_length_for_force
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.problems.open_extension import anneal_open, excess_length_for_force
 
     if ensemble not in ("extension", "force"):
         raise UserError(f"--ensemble must be extension or force, got {ensemble!r}")
@@ -69,10 +57,10 @@ def open_knot(
     if beads is not None:
         raise UserError("--beads applies to --ensemble force only (at fixed extension the "
                         "embedding sets N)")
-    les = _floats(excess_length or "80", "--excess-length")
+    les = floats(excess_length or "80", "--excess-length")
     if any(v != int(v) or v < 8 for v in les):
         raise UserError(f"--excess-length must be integers ≥ 8 (bond lengths), got {les}")
-    forces = _floats(force, "--force") if force else []
+    forces = floats(force, "--force") if force else []
     if any(f <= 0 for f in forces):
         raise UserError(f"--force must be > 0 (units C/b²), got {forces}")
     if replicas < 1 or moves < 1000:
@@ -129,13 +117,13 @@ def open_knot(
     if out_dir is not None:
         summary["files"] = _open_files(out_dir, results, points, summary)
     if json_:
-        _dump(summary)
+        dump(summary)
         return
     from rich.table import Table
 
     b = res0.bounds
-    t = Table(title=f"open {res0.knot}: ε_e bounds [{_fmt(b['eps_e_lower'])}, "
-                    f"{_fmt(b['eps_e_upper'])}] (§VIII)")
+    t = Table(title=f"open {res0.knot}: ε_e bounds [{fmt(b['eps_e_lower'])}, "
+                    f"{fmt(b['eps_e_upper'])}] (§VIII)")
     for col in ("L_e", "N", "F asked", "μ = E/L_e", "ε_e = μL_e²", "shape", "knot", "s"):
         t.add_column(col, justify="right")
     for p in points:
@@ -155,17 +143,17 @@ def _open_force(name, excess_length, force, beads, moves, replicas, seed, exclus
     """``stiffknots open --ensemble force``: one fixed-force anneal per --force value."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from stiffknots.engine.state import MoveParams
-    from stiffknots.open_force import anneal_open_force
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.problems.open_force import anneal_open_force
 
     if not force:
         raise UserError("--ensemble force needs --force F (in C/b²)")
-    forces = _floats(force, "--force")
+    forces = floats(force, "--force")
     if any(not (f > 0 and math.isfinite(f)) for f in forces):
         raise UserError(f"--force must be > 0 (units C/b²), got {forces}")
     le0 = None
     if excess_length is not None:
-        les = _floats(excess_length, "--excess-length")
+        les = floats(excess_length, "--excess-length")
         if len(les) != 1 or les[0] != int(les[0]) or les[0] < 8:
             raise UserError("with --ensemble force, --excess-length is the starting L_e: one "
                             f"integer ≥ 8, got {les}")
@@ -235,13 +223,13 @@ def _open_force(name, excess_length, force, beads, moves, replicas, seed, exclus
         files["summary"] = str(out_dir / "summary.json")
         summary["files"] = files
     if json_:
-        _dump(summary)
+        dump(summary)
         return
     from rich.table import Table
 
     b = res0.bounds
-    t = Table(title=f"open {res0.knot} at fixed force: ε_e bounds [{_fmt(b['eps_e_lower'])}, "
-                    f"{_fmt(b['eps_e_upper'])}] (§VIII)")
+    t = Table(title=f"open {res0.knot} at fixed force: ε_e bounds [{fmt(b['eps_e_lower'])}, "
+                    f"{fmt(b['eps_e_upper'])}] (§VIII)")
     for col in ("F", "L_e", "μ = E/L_e", "μ/F", "ε_e = E·L_e", "shape", "knot", "s"):
         t.add_column(col, justify="right")
     for p in points:
@@ -281,65 +269,3 @@ def _open_files(out_dir: Path, results, points, summary) -> dict:
         {k2: v for k2, v in summary.items() if k2 != "files"}, indent=2, default=float))
     files["summary"] = str(out_dir / "summary.json")
     return files
-
-
-@app.command()
-def tightest(
-    name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
-    max_curvature: Annotated[float | None, typer.Option(
-        help="Curvature limit 1/R in 1/(your length unit): the minimal length L† is then "
-             "printed in that unit too (the search itself is scale-free: L†/R).")] = None,
-    beads: Annotated[int, typer.Option(help="Resolution N (finer → thinner limit).")] = 150,
-    moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
-    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
-    seed: Annotated[int, typer.Option(help="Seed.")] = 0,
-    exclusion: Annotated[str, typer.Option(help="bead (d = 1/√2) or tube.")] = "bead",
-    start: Annotated[str, typer.Option(
-        help="Starting embedding: all (every start that exists for the knot), braid or cage "
-             "(two-box rational knots [ab]: 4_1, 5_2, ...).")] = "all",
-    out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
-    json_: JsonOpt = False,
-) -> None:
-    """Shortest knot whose curvature never exceeds 1/R (paper §IX.D): L†/R and its bounds."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    from stiffknots.tightest import radius_of_turn
-    from stiffknots.tightest import tightest as run
-
-    if max_curvature is not None and max_curvature <= 0:
-        raise UserError(f"--max-curvature must be > 0, got {max_curvature}")
-    if beads < 8 or replicas < 1:
-        raise UserError("--beads must be ≥ 8 and --replicas ≥ 1")
-    from stiffknots.knots.starts import STARTS
-
-    if start != "all" and start not in STARTS:
-        raise UserError(f"--start must be all or one of {', '.join(STARTS)}, got {start!r}")
-    with Progress(TextColumn("[bold]tightest {task.fields[knot]}"), BarColumn(),
-                  TextColumn("{task.completed}/{task.total} replicas"), TimeElapsedColumn(),
-                  console=err, transient=True, disable=json_) as prog:
-        task = prog.add_task("tight", total=replicas, knot=name)
-        res = run(name, beads, moves=moves, replicas=replicas, seed=seed, exclusion=exclusion,
-                  on_replica_done=lambda _r: prog.advance(task), start=start)
-    d = res.to_dict()
-    d["max_curvature"] = max_curvature
-    if max_curvature is not None:
-        d["length"] = d["length_over_R"] / max_curvature
-    if out_dir is not None:
-        from stiffknots.report.render import save_chain_png
-
-        paths = res.save(out_dir)
-        png = Path(out_dir) / "best.png"
-        save_chain_png(res.best.coords, png,
-                       title=f"{res.knot}: L†/R = {res.length_over_R:.3f} (N = {beads})")
-        d["files"] = {k: str(v) for k, v in paths.items()} | {"png": str(png)}
-    if json_:
-        _dump(d)
-        return
-    b = res.bounds
-    out.print(f"{res.knot}: L†/R = {d['length_over_R']:.4f}  (bounds [{_fmt(b['lower'])}, "
-              f"{_fmt(b['upper'])}], {b['attained_by']}); θ* = {d['theta_max']:.5f} rad, "
-              f"R = {radius_of_turn(d['theta_max']):.3f} bonds; replicas "
-              + ", ".join(f"{r.length_over_R:.4f}" for r in res.replicas)
-              + f"; {res.wall_time:.0f} s")
-    if max_curvature is not None:
-        out.print(f"with 1/R = {max_curvature:g}: L† = {d['length']:.4g}")

@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from stiffknots.annealing import anneal, checkpoint_path
+from helpers import braid_chain
 from stiffknots.engine.driver import (
     AnnealSettings,
     RunStopped,
@@ -18,13 +18,12 @@ from stiffknots.engine.driver import (
     run_replica,
 )
 from stiffknots.engine.schedules import Schedule
-from stiffknots.knots.catalogue import get_knot
-from stiffknots.knots.embedding import embed_braid
+from stiffknots.engine.tempering import run_tempering
+from stiffknots.problems.closed import anneal, checkpoint_path
 
 
 def chain(name, n=150):
-    k = get_knot(name)
-    return embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=n)
+    return braid_chain(name, n)
 
 
 SMALL = AnnealSettings(moves=300_000, n_chunks=20)
@@ -50,24 +49,31 @@ def test_plan_adds_up():
     assert all(s.temperature == 0.0 for s in plain[-10:])
 
 
+def run(x, settings, **kw):
+    """The driver's run loop, or replica exchange for a tempering schedule."""
+    if settings.schedule.kind == "tempering":
+        return run_tempering(x, settings, **kw)
+    return run_replica(x, settings, **kw)
+
+
 @pytest.mark.parametrize("settings", [SMALL, PT], ids=["anneal", "tempering"])
 def test_stop_and_resume_is_exact(tmp_path, settings):
     x = chain("3_1")
-    a = run_replica(x, settings, seed=11)
+    a = run(x, settings, seed=11)
     ck = tmp_path / "run.npz"
     # stop twice (the second time across the end of the relaxation stage), then finish
     with pytest.raises(RunStopped) as e1:
-        run_replica(x, settings, seed=11, checkpoint=ck, stop_after=5)
+        run(x, settings, seed=11, checkpoint=ck, stop_after=5)
     assert e1.value.step == 5 and ck.exists()
     with pytest.raises(RunStopped) as e2:
-        run_replica(x, settings, seed=11, checkpoint=ck, resume=True, stop_after=9)
+        run(x, settings, seed=11, checkpoint=ck, resume=True, stop_after=9)
     assert e2.value.step == 14
-    b = run_replica(x, settings, seed=11, checkpoint=ck, resume=True)
+    b = run(x, settings, seed=11, checkpoint=ck, resume=True)
     assert b.resumed_from_step == 14
     same(a, b)
     arrays, meta = load_checkpoint(ck)  # the final checkpoint resumes to the same result
     assert meta["step"] == meta["n_steps"] and meta["seed"] == 11
-    same(a, run_replica(x, settings, seed=11, checkpoint=ck, resume=True))
+    same(a, run(x, settings, seed=11, checkpoint=ck, resume=True))
 
 
 def test_periodic_checkpoint_and_fresh_start(tmp_path):

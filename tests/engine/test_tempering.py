@@ -8,19 +8,22 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from helpers import braid_chain
 from stiffknots.engine import kernel as K
-from stiffknots.engine.driver import AnnealSettings, run_replica
+from stiffknots.engine.driver import AnnealSettings
 from stiffknots.engine.schedules import Schedule
 from stiffknots.engine.state import ChainState, MoveParams
-from stiffknots.engine.tempering import attempt_swaps, copy_seeds, swap_probability
-from stiffknots.knots.catalogue import get_knot
-from stiffknots.knots.embedding import embed_braid
+from stiffknots.engine.tempering import (
+    attempt_swaps,
+    copy_seeds,
+    run_tempering,
+    swap_probability,
+)
 from stiffknots.knots.identify import identify
 
 
 def chain(name, n=150):
-    k = get_knot(name)
-    return embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=n)
+    return braid_chain(name, n)
 
 
 PT = AnnealSettings(moves=400_000, n_chunks=20,
@@ -102,8 +105,8 @@ def test_copies_energy_and_knot_type():
 
 def test_run_tempering_result():
     x = chain("3_1")
-    a = run_replica(x, PT, seed=2)
-    b = run_replica(x, PT, seed=2)
+    a = run_tempering(x, PT, seed=2)
+    b = run_tempering(x, PT, seed=2)
     assert np.array_equal(a.coords, b.coords) and a.epsilon == b.epsilon
     info = a.tempering
     assert info["ladder"] == pytest.approx(list(np.geomspace(1e-6, 1e-3, 4)))
@@ -114,7 +117,7 @@ def test_run_tempering_result():
     assert a.exclusion_margin >= 0 and a.max_bond_error < 1e-10
     assert identify(a.coords) == identify(x)
     assert a.trace_moves[-1] <= PT.moves
-    c = run_replica(x, replace(PT, moves=410_000), seed=2)
+    c = run_tempering(x, replace(PT, moves=410_000), seed=2)
     assert not np.array_equal(a.coords, c.coords)
 
 

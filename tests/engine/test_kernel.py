@@ -6,18 +6,16 @@ import math
 import numpy as np
 import pytest
 
+from helpers import braid_chain
 from stiffknots.engine import kernel as K
 from stiffknots.engine.driver import AnnealSettings, run_replica
 from stiffknots.engine.schedules import Schedule
 from stiffknots.engine.state import ChainState, MoveParams
-from stiffknots.knots.catalogue import get_knot
-from stiffknots.knots.embedding import embed_braid
 from stiffknots.knots.identify import identify
 
 
 def chain(name, n=150):
-    k = get_knot(name)
-    return embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=n)
+    return braid_chain(name, n)
 
 
 def bonds(pos):

@@ -31,7 +31,7 @@ from stiffknots.analysis.synthetic import (
 from stiffknots.chain import Chain, regular_polygon
 from stiffknots.theory.elastica import eight_curve, eighty_curve
 
-DATA = Path(__file__).parent / "data" / "analysis"
+DATA = Path(__file__).parent.parent / "data" / "analysis"
 MANIFEST = json.loads((DATA / "fixtures.json").read_text())["fixtures"]
 
 

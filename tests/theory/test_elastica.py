@@ -8,6 +8,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
+from stiffknots.report.figures import plot_elastica
 from stiffknots.theory import (
     EPS_0,
     PAPER_VALUES,
@@ -253,7 +254,7 @@ def test_hierarchy_holds():
 
 def test_plot(tmp_path):
     out = tmp_path / "elastica.png"
-    fig = el.plot_elastica(str(out), n_points=200, dpi=50)
+    fig = plot_elastica(str(out), n_points=200, dpi=50)
     assert out.stat().st_size > 1000
     assert len(fig.axes) == 3
 

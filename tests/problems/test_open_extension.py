@@ -7,12 +7,13 @@ import json
 import numpy as np
 import pytest
 
+from stiffknots.analysis.open_shape import open_shape
 from stiffknots.engine.state import ChainState, MoveParams, check_open_clamping
 from stiffknots.knots.catalogue import get_knot
 from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
 from stiffknots.knots.open_embedding import embed_open
-from stiffknots.open_knots import excess_length_for_force, open_shape
-from stiffknots.tightest import length_over_R, radius_of_turn
+from stiffknots.problems.open_extension import excess_length_for_force
+from stiffknots.problems.tightest import length_over_R, radius_of_turn
 
 
 def _open(name, nk, seed=1):

@@ -1,0 +1,5 @@
+"""``python -m stiffknots.cli``."""
+
+from stiffknots.cli.main import main
+
+main()

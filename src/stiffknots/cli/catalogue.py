@@ -1,0 +1,120 @@
+"""Commands about the catalogue and the theory: ``knot``, ``elastica``, ``families``,
+``version``."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from stiffknots._version import __version__
+from stiffknots.cli.app import JsonOpt, UserError, dump, fmt, out
+
+
+def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T(2,3) ...")],
+         json_: JsonOpt = False) -> None:
+    """A knot's data (KnotInfo), its energy bounds and, when n = i, its ground state."""
+    from stiffknots.knots.summary import knot_summary
+
+    d = knot_summary(name)
+    if json_:
+        dump(d)
+        return
+    t = Table(title=f"knot {d['name']}" + (f" = {d['torus']}" if d["torus"] else ""),
+              show_header=False)
+    t.add_row("crossing number n_c", str(d["crossing_number"]))
+    t.add_row("bridge number n", fmt(d["bridge_number"]))
+    t.add_row("braid index i", fmt(d["braid_index"]))
+    t.add_row("braid word", str(d["braid_word"]))
+    t.add_row("alternating", fmt(d["alternating"]))
+    t.add_row("ε lower bound 2π²n² (e:epsilon_sup_n2)", fmt(d["lower_bound"]))
+    t.add_row(f"ε upper bound ({d['upper_bound_attained_by']}) (e:epsilon_ineq_0)",
+              fmt(d["upper_bound"]))
+    g = d["predicted_ground_state"]
+    t.add_row("ground state", f"circular braid, multiplicity {g['multiplicity']}, "
+              f"ε* = {g['epsilon']:.4f}" if g else "not fixed by the bounds (n < i)")
+    if "open_tension_bounds" in d:
+        ob = d["open_tension_bounds"]
+        t.add_row("open knot μ*L_e²/C (e:mu_ineq)", f"[{fmt(ob['lower'])}, {fmt(ob['upper'])}]")
+    rc = d["restricted_curvature_bounds"]
+    t.add_row("restricted curvature L†/R (§IX D)", f"[{fmt(rc['lower'])}, {fmt(rc['upper'])}]")
+    out.print(t)
+
+
+def elastica(
+    out_dir: Annotated[Path | None, typer.Option("--out", help="Write elastica.png here.")] = None,
+    json_: JsonOpt = False,
+) -> None:
+    """The planar elastica constants of Appendix D (loop, 8, 80), checked two ways."""
+    from stiffknots.report.figures import plot_elastica
+    from stiffknots.theory.elastica import PAPER_VALUES, elastica_constants
+
+    c = elastica_constants("integrals")
+    c2 = elastica_constants("elliptic")
+    d = c.as_dict()
+    d["eps_cb_i2"] = 2 * math.pi**2 * 4
+    d["eps_cb_i3"] = 2 * math.pi**2 * 9
+    d["eps_pbl_n2"] = 16 * c.eps_loop
+    d["cross_check"] = {k: abs(v - c2.as_dict()[k]) for k, v in c.as_dict().items()}
+    d["paper"] = dict(PAPER_VALUES)
+    png = None
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        png = out_dir / "elastica.png"
+        plot_elastica(str(png))
+        d["figure"] = str(png)
+    if json_:
+        dump(d)
+        return
+    t = Table(title="planar elastica (Appendix D)")
+    for col in ("constant", "computed", "elliptic check |Δ|", "paper"):
+        t.add_column(col)
+    for k, v in c.as_dict().items():
+        t.add_row(k, f"{v:.10f}", f"{d['cross_check'][k]:.1e}", str(PAPER_VALUES[k]))
+    out.print(t)
+    if png:
+        out.print(f"figure: {png}")
+
+
+def families(
+    max_crossings: Annotated[int, typer.Option(help="Largest crossing number (3..13).")] = 10,
+    json_: JsonOpt = False,
+) -> None:
+    """The n = i family (ground state = circular braid) and its fraction (§VI C)."""
+    from stiffknots.knots.catalogue import n_equals_i_knots, n_equals_i_statistics
+
+    if not 3 <= max_crossings <= 13:
+        raise UserError(f"--max-crossings must be between 3 and 13, got {max_crossings}")
+    st = n_equals_i_statistics(max_crossings)
+    knots = n_equals_i_knots(max_crossings)
+    tot = st["total"]
+    d = {
+        "max_crossings": max_crossings,
+        "total": tot["knots"],
+        "n_equals_i": tot["n_equals_i"],
+        "unknown": tot["unknown"],
+        "fraction": tot["fraction"],
+        "by_crossing": st["by_crossing"],
+        "knots": [k.name for k in knots],
+    }
+    if json_:
+        dump(d)
+        return
+    t = Table(title=f"n = i prime knots, 3 ≤ n_c ≤ {max_crossings}")
+    for col in ("n_c", "knots", "n = i", "unknown", "fraction"):
+        t.add_column(col, justify="right")
+    for c, row in st["by_crossing"].items():
+        t.add_row(str(c), str(row["knots"]), str(row["n_equals_i"]), str(row["unknown"]),
+                  fmt(row["fraction"], 3))
+    t.add_row("all", str(tot["knots"]), str(tot["n_equals_i"]), str(tot["unknown"]),
+              fmt(tot["fraction"], 3))
+    out.print(t)
+    out.print("n = i knots: " + ", ".join(d["knots"]))
+
+
+def version() -> None:
+    """Print the package version."""
+    out.print(__version__)

@@ -1,0 +1,59 @@
+"""Entry point of the ``stiffknots`` command: user mistakes → one line on stderr and exit
+code 2, Ctrl-C → exit 130, never a traceback for either."""
+
+from __future__ import annotations
+
+import typer
+
+from stiffknots.cli import anneal, catalogue, open, studies, tightest
+from stiffknots.cli.app import app, err
+from stiffknots.errors import InvalidParameter, UserInputError
+
+# the commands, in the order `stiffknots --help` lists them
+for _name, _command in (
+        ("knot", catalogue.knot),
+        ("elastica", catalogue.elastica),
+        ("families", catalogue.families),
+        ("anneal", anneal.anneal),
+        ("open", open.open_knot),
+        ("tightest", tightest.tightest),
+        ("paper", studies.paper),
+        ("bench", studies.bench),
+        ("version", catalogue.version)):
+    app.command(_name)(_command)
+
+# API parameter → command-line option, where the names differ
+OPTION_NAMES = {"n_beads": "--beads", "checkpoint_dir": "--checkpoint"}
+
+
+def option_name(param: str) -> str:
+    return OPTION_NAMES.get(param, "--" + param.replace("_", "-"))
+
+
+def main() -> None:
+    """Run the command line (the ``stiffknots`` script)."""
+    try:
+        rc = app(standalone_mode=False)
+    except InvalidParameter as e:
+        err.print(f"error: {e.for_option(option_name(e.param))}", highlight=False, markup=False,
+                  soft_wrap=True)
+        raise SystemExit(2) from None
+    except (UserInputError, ValueError) as e:
+        # ValueError: parameter validation of the engine; one line whatever the width
+        err.print(f"error: {e}", highlight=False, markup=False, soft_wrap=True)
+        raise SystemExit(2) from None
+    except typer.Abort:
+        err.print("interrupted", highlight=False, markup=False)
+        raise SystemExit(130) from None
+    except KeyboardInterrupt:
+        err.print("interrupted", highlight=False, markup=False)
+        raise SystemExit(130) from None
+    except Exception as e:  # click usage errors (typer vendors click: no import of it here)
+        if callable(getattr(e, "show", None)) and isinstance(getattr(e, "exit_code", None), int):
+            e.show()
+            raise SystemExit(e.exit_code) from None
+        raise
+    if isinstance(rc, int) and rc != 0:
+        if rc == 130:
+            err.print("interrupted", highlight=False, markup=False)
+        raise SystemExit(rc)

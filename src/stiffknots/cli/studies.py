@@ -1,0 +1,53 @@
+"""Commands that run studies: ``paper`` (the paper's §VII) and ``bench`` (benchmarks)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from stiffknots.cli.app import JsonOpt, UserError, dump, err, out
+
+
+def bench(
+    json_: JsonOpt = False,
+    seconds_budget: Annotated[float, typer.Option(help="Rough total time budget (s).")] = 60.0,
+) -> None:
+    """Benchmarks: moves per second (N = 150, 1000, 10000), ratio to plain numpy, seconds to
+    reach the paper's energies (one core)."""
+    from stiffknots.studies.benchmark import run_benchmarks
+
+    d = run_benchmarks(budget=seconds_budget, log=None if json_ else err.print)
+    if json_:
+        dump(d)
+        return
+    t = Table(title="single-bead moves per second (one core)")
+    t.add_column("N", justify="right")
+    t.add_column("moves/s", justify="right")
+    for n, v in d["moves_per_second"].items():
+        t.add_row(str(n), f"{v:,.0f}")
+    out.print(t)
+    out.print(f"plain-numpy ratio at N=150: {d['plain_numpy_ratio']:.0f}×")
+    for k, v in d["seconds_to_target"].items():
+        out.print(f"{k}: {v}")
+
+
+def paper(
+    budget: Annotated[str, typer.Option(
+        help="tiny (seconds, smoke test), small (≤ 10 min on 2 cores) or full (paper grade)."
+    )] = "small",
+    out_dir: Annotated[Path, typer.Option("--out", help="Report folder.")] = Path("results/paper"),
+    seed: Annotated[int, typer.Option(help="Seed (replica seeds derive from it).")] = 0,
+    json_: JsonOpt = False,
+) -> None:
+    """The paper's Monte Carlo study (§VII): 3_1, 4_1, 5_2, 6_2, 6_3 under the bead rule and
+    the tube model; ground and metastable states classified; report.md + report.html."""
+    from stiffknots.studies.paper import BUDGETS, run_paper
+
+    if budget not in BUDGETS:
+        raise UserError(f"--budget must be one of {', '.join(BUDGETS)}, got {budget!r}")
+    d = run_paper(budget=budget, out_dir=out_dir, seed=seed, log=None if json_ else out.print)
+    if json_:
+        dump(d)

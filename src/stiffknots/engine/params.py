@@ -1,0 +1,186 @@
+"""Parameters of a Monte Carlo run that the kernels read: the moves, the exclusion model, the
+energy, and the ensemble (closed chain, open chain at fixed extension or at fixed force).
+
+Plain frozen dataclasses; :meth:`MoveParams.arrays` packs them into the kernels' integer and
+float parameter arrays (slots in :mod:`stiffknots.engine.prims`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from stiffknots.engine import prims as K
+
+EXCLUSION_MODELS = ("bead", "tube")
+ENERGY_MODELS = ("bending", "power")
+ENSEMBLES = ("closed", "extension", "force")
+
+__all__ = ["ENERGY_MODELS", "ENSEMBLES", "EXCLUSION_MODELS", "Ensemble", "MoveParams"]
+
+
+@dataclass(frozen=True)
+class MoveParams:
+    """Parameters of the crankshaft moves and of the exclusion model (units: bond length 1).
+
+    Attributes
+    ----------
+    delta : angle of the paper's single-bead move (±delta), default π/100 (§VII).
+    p_single : probability that a move is the paper's single-bead move.
+    m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
+        multi-bead moves and leaves exactly the paper's move).
+    phi_max : largest rotation angle of a multi-bead move (radians).
+    l_cap, l_min : a multi-bead move first draws a displacement scale ℓ log-uniformly in
+        [l_min, l_cap], then an angle uniform in ±min(phi_max, ℓ/ρ_max), ρ_max the largest
+        distance of a moved bead from the axis; no point moves farther than l_cap.
+    exclusion : ``"bead"`` (no two beads at index distance ≥ 2 closer than ``d``; the paper's
+        rule, d = 1/√2) or ``"tube"`` (no two segments sharing no bead closer than ``w``).
+    d : bead exclusion distance.
+    w : tube diameter (``tube`` model only).
+    energy : ``"bending"`` — the paper's E_d = Σ (1 − cos θ_n) (§VII) — or ``"power"`` —
+        Σ (1 − cos θ_n)^power, whose minimum approaches the smallest achievable largest
+        turning angle as ``power`` grows (the restricted-curvature search, §IX.D).
+    power : exponent of the ``"power"`` energy (integer ≥ 1).
+    energy_scale : the ``"power"`` energy is Σ ((1 − cos θ_n)/energy_scale)^power.
+    max_turn : largest turning angle θ_max allowed at any joint (radians), or None for no
+        limit; with unit bonds it is the curvature limit 1/R, R = 1/(2 sin(θ_max/2)).
+    """
+
+    delta: float = float(np.pi / 100)
+    p_single: float = 0.5
+    m_max: int = 75
+    phi_max: float = 0.6
+    l_cap: float = 0.5
+    l_min: float = 0.03
+    exclusion: str = "bead"
+    d: float = float(1 / np.sqrt(2))
+    w: float = float(1 / np.sqrt(2))
+    energy: str = "bending"
+    power: int = 8
+    energy_scale: float = 1.0
+    max_turn: float | None = None
+
+    def validate(self, n_beads: int) -> None:
+        if self.exclusion not in EXCLUSION_MODELS:
+            raise ValueError(
+                f"unknown exclusion model {self.exclusion!r}; "
+                f"allowed: {', '.join(EXCLUSION_MODELS)}"
+            )
+        if not 0 < self.delta < 0.5:
+            raise ValueError(f"delta must be in (0, 0.5) rad, got {self.delta}")
+        if not 0 <= self.p_single <= 1:
+            raise ValueError(f"p_single must be in [0, 1], got {self.p_single}")
+        if self.m_max < 1:
+            raise ValueError(f"m_max must be ≥ 1, got {self.m_max}")
+        if not 0 < self.l_min <= self.l_cap:
+            raise ValueError(f"need 0 < l_min ≤ l_cap, got {self.l_min}, {self.l_cap}")
+        if not 0 < self.d < 1 or not 0 < self.w < 1:
+            raise ValueError("exclusion distances d and w must lie in (0, 1) bond lengths")
+        if self.energy not in ENERGY_MODELS:
+            raise ValueError(
+                f"unknown energy {self.energy!r}; allowed: {', '.join(ENERGY_MODELS)}"
+            )
+        if int(self.power) != self.power or self.power < 1:
+            raise ValueError(f"power must be an integer ≥ 1, got {self.power}")
+        if not self.energy_scale > 0:
+            raise ValueError(f"energy_scale must be > 0, got {self.energy_scale}")
+        if self.max_turn is not None and not 0 < self.max_turn < np.pi:
+            raise ValueError(f"max_turn must be in (0, π) radians or None, got {self.max_turn}")
+        if n_beads < 8:
+            raise ValueError(f"a chain needs at least 8 beads, got {n_beads}")
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    @property
+    def cell(self) -> float:
+        """Cell side: the reach of the single-bead move's checks (see kernel docstring)."""
+        wt = self.w if self.exclusion == "tube" else 0.0
+        return max(1.5 + max(wt, self.delta), self.d + 0.5)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        ip = np.zeros(K.I_NIPAR, dtype=np.int64)
+        fp = np.zeros(K.F_NFPAR, dtype=np.float64)
+        ip[K.I_MODE] = EXCLUSION_MODELS.index(self.exclusion)
+        ip[K.I_MMAX] = self.m_max
+        fp[K.F_DELTA] = self.delta
+        fp[K.F_PSINGLE] = self.p_single if self.m_max > 1 else 1.0
+        fp[K.F_PHIMAX] = self.phi_max
+        fp[K.F_LCAP] = self.l_cap
+        fp[K.F_LMIN] = self.l_min
+        fp[K.F_D] = self.d
+        fp[K.F_W] = self.w if self.exclusion == "tube" else 0.0
+        fp[K.F_CELL] = self.cell
+        ip[K.I_EMODE] = ENERGY_MODELS.index(self.energy)
+        ip[K.I_POWER] = int(self.power)
+        fp[K.F_EINV] = float(self.energy_scale)
+        fp[K.F_CMIN] = -2.0 if self.max_turn is None else float(np.cos(self.max_turn))
+        return ip, fp
+
+
+
+
+@dataclass(frozen=True)
+class Ensemble:
+    """The statistical ensemble of a chain (paper §VII for closed knots, §VIII for open ones).
+
+    Attributes
+    ----------
+    kind : ``"closed"`` — a closed chain (a knot); ``"extension"`` — an open chain whose two
+        end segments are clamped on the z axis, so that Δz and the excess length
+        L_e = (N − 1) − Δz are fixed (the force term −F·Δz is then a constant); ``"force"`` —
+        the same open chain whose ends slide along z under the pulling force ``force``: the
+        energy is E_d − F·Δz and L_e is measured (end moves of
+        :mod:`stiffknots.engine.force_kernel`).
+    force : F in C/b² (``force`` ensemble only).
+    end_fraction : fraction of the attempted moves that move an end (slides and pivots).
+    slide_fraction : fraction of the end moves that are slides (the others are pivots).
+    end_m_max : largest number of beads rotated by a pivot move (≥ 1).
+    slide_m_max : largest number of free beads translated by a slide move (None: all).
+    """
+
+    kind: str = "closed"
+    force: float = 0.0
+    end_fraction: float = 0.1
+    slide_fraction: float = 0.8
+    end_m_max: int = 30
+    slide_m_max: int | None = None
+
+    def validate(self) -> None:
+        if self.kind not in ENSEMBLES:
+            raise ValueError(f"unknown ensemble {self.kind!r}; allowed: {', '.join(ENSEMBLES)}")
+        if self.kind != "force":
+            return
+        if not (math.isfinite(self.force) and self.force >= 0):
+            raise ValueError(f"the force must be ≥ 0 (in units of C/b²), got {self.force}")
+        if not 0 <= self.end_fraction <= 1:
+            raise ValueError(f"end_fraction must be in [0, 1], got {self.end_fraction}")
+        if not 0 <= self.slide_fraction <= 1:
+            raise ValueError(f"slide_fraction must be in [0, 1], got {self.slide_fraction}")
+        if int(self.end_m_max) != self.end_m_max or self.end_m_max < 1:
+            raise ValueError(f"end_m_max must be an integer ≥ 1, got {self.end_m_max}")
+        if self.slide_m_max is not None and (int(self.slide_m_max) != self.slide_m_max
+                                             or self.slide_m_max < 0):
+            raise ValueError(f"slide_m_max must be an integer ≥ 0, got {self.slide_m_max}")
+
+    @property
+    def closed(self) -> bool:
+        return self.kind == "closed"
+
+    def as_dict(self) -> dict:
+        if self.kind != "force":
+            return {"kind": self.kind}
+        return asdict(self)
+
+
+def ensemble_of(ensemble: Ensemble | str | None, closed: bool | None = None) -> Ensemble:
+    """An :class:`Ensemble` from an ensemble, its kind, or the older ``closed`` flag."""
+    if isinstance(ensemble, Ensemble):
+        return ensemble
+    if isinstance(ensemble, str):
+        return Ensemble(kind=ensemble)
+    if closed is None or closed:
+        return Ensemble("closed")
+    return Ensemble("extension")

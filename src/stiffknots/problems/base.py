@@ -1,0 +1,250 @@
+"""The one template of every problem: catalogue → jobs → engine → verification → result.
+
+A problem (closed annealing §VII, open knots at fixed extension or fixed force §VIII, the
+restricted-curvature search §IX D) is a :class:`Problem`: it validates its inputs once, at its
+public boundary, and turns them into :class:`Job` s — one per replica, each with its starting
+chain, seed and run settings. :func:`solve` runs the jobs on all cores
+(:func:`~stiffknots.problems.pool.run_jobs`), each job in a worker process running the engine
+(:func:`~stiffknots.engine.driver.run_replica`, or replica exchange) and verifying its result
+(:func:`run_job`), then sorts the replicas best first and packs them into the problem's
+:class:`ReplicaSet`.
+
+Verification, in one place, of every replica:
+
+* the engine's own checks (:func:`~stiffknots.engine.driver.make_result`): the energy
+  recomputed from scratch equals the incremental one, bonds are unit (1e-10), open chains stay
+  clamped, the exclusion rule holds;
+* the knot type (:func:`~stiffknots.knots.identify.verify_knot`; an open chain is closed along
+  its z axis first): a changed type raises :class:`~stiffknots.errors.TopologyChangedError` —
+  a bug, never a data point.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from stiffknots._version import __version__
+from stiffknots.chain import Chain
+from stiffknots.engine.driver import (
+    AnnealSettings,
+    ReplicaResult,
+    default_workers,
+    run_replica,
+)
+from stiffknots.engine.tempering import run_tempering
+from stiffknots.errors import TopologyChangedError
+from stiffknots.fileio import write_bytes, write_json
+from stiffknots.formats import save
+from stiffknots.problems.pool import run_jobs
+
+
+@dataclass
+class Replica(ReplicaResult):
+    """One verified replica: the engine's :class:`ReplicaResult` plus what the problem adds.
+
+    Attributes
+    ----------
+    knot : the knot type found by the invariant check.
+    knot_verified : True when it is the requested type.
+    start : the starting embedding (``braid``, ``cage``, ``eighty``, ``open``).
+    observables : problem-specific numbers (e.g. ``length_over_R`` of §IX D), also
+        readable as attributes (``r.length_over_R``).
+    """
+
+    knot: str | None = None
+    knot_verified: bool | None = None
+    start: str | None = None
+    observables: dict = field(default_factory=dict)
+
+    def __getattr__(self, name: str):
+        # the problem's observables read as attributes (``r.length_over_R``)
+        obs = self.__dict__.get("observables")
+        if obs is not None and name in obs:
+            return obs[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+
+@dataclass
+class Job:
+    """One replica to run: everything a worker process needs (plain, picklable data)."""
+
+    replica: int
+    seed: int
+    coords: np.ndarray
+    settings: AnnealSettings
+    knot: str
+    start: str = "braid"
+    checkpoint: Path | None = None
+    resume: bool = False
+    checkpoint_seconds: float | None = None
+
+
+def run_job(job: Job) -> Replica:
+    """Worker: run the engine on one job and verify the result's knot type."""
+    from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
+
+    runner = run_tempering if job.settings.schedule.kind == "tempering" else run_replica
+    raw = runner(job.coords, job.settings, job.seed, job.replica, checkpoint=job.checkpoint,
+                 resume=job.resume, checkpoint_every=10 if job.checkpoint else None,
+                 checkpoint_seconds=job.checkpoint_seconds if job.checkpoint else None)
+    coords = raw.coords if job.settings.closed else close_open_chain_along_z(raw.coords)
+    ok, found = verify_knot(coords, job.knot, closed=True)
+    return Replica(**vars(raw), knot=found, knot_verified=bool(ok), start=job.start)
+
+
+@dataclass
+class ReplicaSet:
+    """The replicas of one problem for one knot, best first, with their provenance.
+
+    Every result of stiffknots is one of these (or a thin subclass adding derived
+    properties): ``to_dict`` gives the problem's physics (:meth:`physics`), the bounds, and the
+    provenance (seed, settings, version, wall time, each replica's summary); ``save`` writes
+    ``result.json``, the best chain (``best.xyz``, ``best.json``), every replica's chain and
+    the traces, each file atomically, ``result.json`` last.
+    """
+
+    problem: ClassVar[str] = "anneal"
+    closed: ClassVar[bool] = True
+
+    knot: str
+    beads: int
+    seed: int
+    settings: dict
+    replicas: list[Replica]
+    wall_time: float
+    interrupted: bool = False
+    version: str = __version__
+    bounds: dict = field(default_factory=dict)
+
+    @property
+    def best(self) -> Replica:
+        """The best replica (the first); RuntimeError if none finished (e.g. Ctrl-C)."""
+        if not self.replicas:
+            raise RuntimeError("no replica finished")
+        return self.replicas[0]
+
+    def physics(self) -> dict:
+        """The problem's own numbers (of the best replica); None where no replica finished."""
+        return {"epsilon": self.best.epsilon if self.replicas else None}
+
+    def to_dict(self) -> dict:
+        return {
+            "problem": self.problem,
+            "knot": self.knot,
+            "beads": self.beads,
+            "seed": self.seed,
+            **self.physics(),
+            "bounds": self.bounds,
+            "knot_verified": bool(self.replicas) and all(r.knot_verified
+                                                         for r in self.replicas),
+            "settings": self.settings,
+            "wall_time": self.wall_time,
+            "interrupted": self.interrupted,
+            "version": self.version,
+            "replicas": [r.summary() for r in self.replicas],
+        }
+
+    def chain_meta(self, r: Replica) -> dict:
+        """Metadata stored with a replica's chain file."""
+        return {"problem": self.problem, "knot": self.knot, "seed": r.seed,
+                "replica": r.replica, "epsilon": r.epsilon, "version": self.version,
+                "settings": self.settings}
+
+    def save(self, out: str | Path) -> dict[str, Path]:
+        """Write ``best.xyz``/``best.json``, ``replica_K.xyz`` for every replica,
+        ``traces.npz`` and, last, ``result.json`` into ``out`` (each file atomically)."""
+        import io
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths: dict[str, Path] = {}
+        for r in self.replicas:
+            save(Chain(r.coords, closed=self.closed, meta=self.chain_meta(r)),
+                 out / f"replica_{r.replica}.xyz")
+        if self.replicas:
+            best = Chain(self.best.coords, closed=self.closed, meta=self.chain_meta(self.best))
+            save(best, out / "best.xyz")
+            save(best, out / "best.json")
+            paths["best_xyz"] = out / "best.xyz"
+            paths["best_json"] = out / "best.json"
+            buf = io.BytesIO()
+            np.savez_compressed(buf, **{f"r{r.replica}_{k}": v for r in self.replicas
+                                        for k, v in r.traces.items()})
+            paths["traces"] = write_bytes(out / "traces.npz", buf.getvalue())
+        paths["result"] = write_json(out / "result.json", self.to_dict())
+        return paths
+
+
+class Problem:
+    """A problem of the paper, ready to solve: its inputs validated, its jobs made.
+
+    Subclasses set ``result_type`` and implement :meth:`jobs` (one :class:`Job` per replica),
+    :meth:`bounds`, :meth:`settings_dict`, :meth:`sort_key` (lower is better) and, if they
+    need it, :meth:`observe` (problem-specific numbers of a finished replica) and
+    :meth:`result_fields` (extra fields of the result).
+    """
+
+    result_type: ClassVar[type[ReplicaSet]] = ReplicaSet
+    knot_name: str
+    beads: int
+    seed: int
+
+    def jobs(self) -> list[Job]:
+        raise NotImplementedError
+
+    def bounds(self) -> dict:
+        return {}
+
+    def settings_dict(self) -> dict:
+        raise NotImplementedError
+
+    def sort_key(self, r: Replica) -> float:
+        return r.epsilon
+
+    def observe(self, r: Replica) -> None:
+        """Add problem-specific numbers to a finished replica (parent process)."""
+
+    def result_fields(self, replicas: list[Replica]) -> dict[str, Any]:
+        return {}
+
+
+def solve(problem: Problem, *, workers: int | None = None,
+          on_replica_done: Callable[[Replica], None] | None = None) -> ReplicaSet:
+    """Run every job of ``problem`` on ``workers`` processes (default: all cores) and return
+    its verified replicas, best first.
+
+    Ctrl-C keeps the finished replicas (``interrupted`` is then True).
+
+    Raises
+    ------
+    TopologyChangedError
+        If a replica ends with another knot type (never expected: a bug, never a data point).
+    """
+    jobs = problem.jobs()
+    nw = workers or default_workers(len(jobs))
+    t0 = time.perf_counter()
+
+    def done(r: Replica) -> None:
+        problem.observe(r)
+        if on_replica_done is not None:
+            on_replica_done(r)
+
+    results, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done)
+    results.sort(key=problem.sort_key)
+    bad = [r for r in results if not r.knot_verified]
+    if bad:
+        raise TopologyChangedError(
+            f"{len(bad)} replica(s) of {problem.knot_name} ended as "
+            f"{', '.join(str(r.knot) for r in bad)}; this is a bug in stiffknots, please "
+            f"report it with the seed {problem.seed} and the settings")
+    return problem.result_type(
+        knot=problem.knot_name, beads=problem.beads, seed=problem.seed,
+        settings=problem.settings_dict(), replicas=results,
+        wall_time=time.perf_counter() - t0, interrupted=interrupted,
+        bounds=problem.bounds(), **problem.result_fields(results))

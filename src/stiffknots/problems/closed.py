@@ -1,0 +1,165 @@
+"""``stiffknots.anneal``: any knot of the catalogue to a verified minimum-energy chain (§VII).
+
+Composes catalogue → starting embeddings → engine (replicas on all cores) → verification
+(:mod:`stiffknots.problems.base`). ε = E_d·N/C with E_d = C Σ(1 − u_n·u_{n+1}) (§VII).
+
+Long runs can checkpoint every replica (``checkpoint_dir``) and be resumed (``resume=True``)
+with exactly the result of an uninterrupted run (:mod:`stiffknots.engine.driver`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import ClassVar
+
+from stiffknots.engine.driver import AnnealSettings, replica_seeds
+from stiffknots.engine.params import MoveParams
+from stiffknots.engine.schedules import Schedule
+from stiffknots.errors import InvalidParameter
+from stiffknots.problems import validate as V
+from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve
+
+DEFAULT_MOVES = AnnealSettings.moves  # 30 M: relaxation + annealing (schedules.py)
+
+
+@dataclass
+class AnnealResult(ReplicaSet):
+    """Replicas of one closed knot, best (lowest ε) first."""
+
+    problem: ClassVar[str] = "anneal"
+
+    @property
+    def epsilon(self) -> float:
+        return self.best.epsilon
+
+
+def checkpoint_path(checkpoint_dir: str | Path, replica: int) -> Path:
+    """The checkpoint file of one replica inside ``checkpoint_dir``."""
+    return Path(checkpoint_dir) / f"replica_{replica}.ckpt.npz"
+
+
+class ClosedAnneal(Problem):
+    """Annealing of a closed knot (§VII); see :func:`anneal` for the parameters."""
+
+    result_type = AnnealResult
+
+    def __init__(self, knot: str, beads: int = 150, moves: int = DEFAULT_MOVES,
+                 replicas: int = 2, seed: int = 0, *, schedule: Schedule | None = None,
+                 params: MoveParams | None = None, quench_fraction: float = 0.1,
+                 target_epsilon: float | None = None,
+                 checkpoint_dir: str | Path | None = None, resume: bool = False,
+                 checkpoint_seconds: float | None = 60.0,
+                 start: str | Sequence[str] = "all"):
+        from stiffknots.knots.catalogue import get_knot
+        from stiffknots.knots.starts import resolve_starts, start_chain
+        from stiffknots.theory.bounds import closed_bounds
+
+        self.knot = get_knot(knot)
+        self.knot_name = self.knot.name
+        self.beads = V.beads(beads)
+        self.replicas = V.replicas(replicas)
+        self.seed = V.seed(seed)
+        if resume and checkpoint_dir is None:
+            raise InvalidParameter("checkpoint_dir", None, "given when resume=True",
+                                   "the folder of the checkpoints")
+        if checkpoint_seconds is not None:
+            V.number("checkpoint_seconds", checkpoint_seconds, 0, lo_open=True)
+        if target_epsilon is not None:
+            V.number("target_epsilon", target_epsilon)
+        self.settings = AnnealSettings(moves=V.moves(moves), schedule=schedule or Schedule(),
+                                       params=params or MoveParams(),
+                                       quench_fraction=quench_fraction,
+                                       target_epsilon=target_epsilon)
+        self.settings.validate()
+        self.settings.params.validate(self.beads)
+        self.starts = resolve_starts(self.knot, start, self.replicas, self.beads)
+        self.chains = {st: start_chain(self.knot, st, self.beads)
+                       for st in dict.fromkeys(self.starts)}
+        self.checkpoint_dir = checkpoint_dir
+        self.resume = resume
+        self.checkpoint_seconds = checkpoint_seconds
+        self._bounds = closed_bounds(self.knot.bridge_number, self.knot.braid_index)
+
+    def jobs(self) -> list[Job]:
+        return [Job(replica=r, seed=s, coords=self.chains[self.starts[r]],
+                    settings=self.settings, knot=self.knot_name, start=self.starts[r],
+                    checkpoint=(checkpoint_path(self.checkpoint_dir, r)
+                                if self.checkpoint_dir is not None else None),
+                    resume=self.resume, checkpoint_seconds=self.checkpoint_seconds)
+                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
+
+    def bounds(self) -> dict:
+        b = self._bounds
+        return {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
+
+    def settings_dict(self) -> dict:
+        return {**self.settings.as_dict(), "start": self.starts}
+
+
+def anneal(
+    knot: str,
+    beads: int = 150,
+    moves: int = DEFAULT_MOVES,
+    replicas: int = 2,
+    seed: int = 0,
+    *,
+    schedule: Schedule | None = None,
+    params: MoveParams | None = None,
+    workers: int | None = None,
+    quench_fraction: float = 0.1,
+    target_epsilon: float | None = None,
+    on_replica_done: Callable[[Replica], None] | None = None,
+    checkpoint_dir: str | Path | None = None,
+    resume: bool = False,
+    checkpoint_seconds: float | None = 60.0,
+    start: str | Sequence[str] = "all",
+) -> AnnealResult:
+    """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
+
+    Parameters
+    ----------
+    knot : knot name in any usual spelling ('4_1', '4.1', 'K11a1', 'T(2,3)').
+    beads : number of beads N (bond length 1, so the chain length L = N).
+    moves : attempted moves per replica (annealing plus the final quench).
+    replicas : independent replicas; they run in parallel on ``workers`` processes
+        (default: all cores).
+    seed : user seed; replica seeds are derived from it (recorded in every result).
+    schedule, params : cooling schedule and move/exclusion parameters (defaults documented in
+        :class:`Schedule` and :class:`MoveParams`).
+    quench_fraction : fraction of the moves spent in the final T = 0 quench.
+    target_epsilon : if given, each replica records the wall time at which ε first fell below.
+    on_replica_done : callback called in the parent process as each replica finishes.
+    checkpoint_dir : if given, every replica writes ``replica_K.ckpt.npz`` there every 10
+        chunks (of 210), every ``checkpoint_seconds`` seconds and when it ends (positions,
+        generator state, counters, energy, chunk index, traces, best chain, settings, seed,
+        version).
+    resume : continue every replica from its checkpoint in ``checkpoint_dir`` when there is
+        one (the call must repeat the same knot, beads, moves, seed and settings; a mismatch
+        raises CheckpointError); the result is exactly that of an uninterrupted run.
+    checkpoint_seconds : wall-clock seconds between checkpoints (None: chunks only).
+    start : starting embedding: ``'braid'`` (closure of KnotInfo's braid word), ``'cage'``
+        (the 4-fold cage of a two-box rational knot [ab], §VII; see
+        :mod:`stiffknots.knots.starts`), ``'eighty'``, ``'all'`` (the default: every start
+        that exists for the knot among braid and cage, shared round-robin among the
+        replicas), or one start per replica (a sequence of ``replicas`` names). Recorded in
+        the settings and in every replica.
+
+    Returns
+    -------
+    AnnealResult
+        Replicas sorted by ε (best first); ε = E_d·N/C (paper §VII).
+
+    Raises
+    ------
+    UserInputError
+        For a wrong knot name, too few beads (the message gives the minimum), bad parameters.
+    TopologyChangedError
+        If any replica ends with a different knot type (never expected; see the kernel docs).
+    """
+    problem = ClosedAnneal(knot, beads, moves, replicas, seed, schedule=schedule, params=params,
+                           quench_fraction=quench_fraction, target_epsilon=target_epsilon,
+                           checkpoint_dir=checkpoint_dir, resume=resume,
+                           checkpoint_seconds=checkpoint_seconds, start=start)
+    return solve(problem, workers=workers, on_replica_done=on_replica_done)

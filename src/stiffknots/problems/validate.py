@@ -1,0 +1,93 @@
+"""Checks of the public parameters, done once at the boundary of every problem.
+
+Each check raises :class:`~stiffknots.errors.InvalidParameter` naming the parameter, the
+value given and what is allowed; the command line re-words it with the option's name. The
+limits are the documented limits of the package (README, "Limits").
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Sequence
+from typing import Any
+
+from stiffknots.errors import InvalidParameter
+
+#: the documented limits
+MIN_BEADS = 8
+MAX_BEADS = 20_000
+MIN_MOVES = 1_000
+MAX_MOVES = 10**12
+MAX_REPLICAS = 1_000
+MAX_SEED = 2**63 - 1
+MIN_EXCESS_LENGTH = 8
+MAX_EXCESS_LENGTH = 10_000
+
+
+def integer(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
+    """``value`` as an int in [lo, hi]; floats with an integer value are accepted."""
+    ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
+    if not ok and isinstance(value, numbers.Real) and math.isfinite(value) and value == int(value):
+        ok, value = True, int(value)
+    if not ok or (lo is not None and value < lo) or (hi is not None and value > hi):
+        raise InvalidParameter(name, value, _range("an integer", lo, hi))
+    return int(value)
+
+
+def number(name: str, value: Any, lo: float | None = None, hi: float | None = None, *,
+           lo_open: bool = False, hi_open: bool = False) -> float:
+    """``value`` as a finite float in the interval (open or closed at each end)."""
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if ok:
+        value = float(value)
+        ok = math.isfinite(value)
+    if ok and lo is not None:
+        ok = value > lo if lo_open else value >= lo
+    if ok and hi is not None:
+        ok = value < hi if hi_open else value <= hi
+    if not ok:
+        raise InvalidParameter(name, value, _interval(lo, hi, lo_open, hi_open))
+    return float(value)
+
+
+def choice(name: str, value: Any, allowed: Sequence[str]) -> str:
+    if value not in allowed:
+        raise InvalidParameter(name, value, "one of " + ", ".join(map(str, allowed)))
+    return str(value)
+
+
+def beads(value: Any, name: str = "beads") -> int:
+    return integer(name, value, MIN_BEADS, MAX_BEADS)
+
+
+def moves(value: Any, name: str = "moves") -> int:
+    return integer(name, value, MIN_MOVES, MAX_MOVES)
+
+
+def replicas(value: Any, name: str = "replicas") -> int:
+    return integer(name, value, 1, MAX_REPLICAS)
+
+
+def seed(value: Any, name: str = "seed") -> int:
+    return integer(name, value, 0, MAX_SEED)
+
+
+def _range(what: str, lo: int | None, hi: int | None) -> str:
+    if lo is not None and hi is not None:
+        return f"{what} in [{lo:,}, {hi:,}]"
+    if lo is not None:
+        return f"{what} ≥ {lo:,}"
+    if hi is not None:
+        return f"{what} ≤ {hi:,}"
+    return what
+
+
+def _interval(lo, hi, lo_open, hi_open) -> str:
+    if lo is not None and hi is not None:
+        return f"a number in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+    if lo is not None:
+        return f"a number {'>' if lo_open else '≥'} {lo:g}"
+    if hi is not None:
+        return f"a number {'<' if hi_open else '≤'} {hi:g}"
+    return "a finite number"

@@ -1,0 +1,35 @@
+"""Helpers shared by the tests: the data folder, the starting chains every engine test uses,
+a smooth trefoil, a chain in the fixed-force ensemble."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+DATA = Path(__file__).parent / "data"
+
+
+def braid_chain(name: str, n: int = 150) -> np.ndarray:
+    """The closure of KnotInfo's braid word of ``name`` as a unit-bond chain of ``n`` beads."""
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.embedding import embed_braid
+
+    k = get_knot(name)
+    return embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=n)
+
+
+def force_state(coords, params=None, seed: int = 0, force: float = 0.0, **kw):
+    """A chain in the fixed-force ensemble (§VIII): ChainState with ``Ensemble("force")``."""
+    from stiffknots.engine.params import Ensemble
+    from stiffknots.engine.state import ChainState
+
+    return ChainState(coords, params, seed=seed, ensemble=Ensemble("force", force=force, **kw))
+
+
+def trefoil(n=120, R=2.0):
+    """Smooth T(2,3) torus knot."""
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return np.column_stack(
+        [(R + np.cos(3 * t)) * np.cos(2 * t), (R + np.cos(3 * t)) * np.sin(2 * t), np.sin(3 * t)]
+    )
