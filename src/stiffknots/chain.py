@@ -31,22 +31,26 @@ from stiffknots._json import json_default
 from stiffknots._version import __version__
 from stiffknots.errors import ChainFormatError
 
-__all__ = ["Chain", "regular_polygon"]
+__all__ = ["Chain", "as_coords", "regular_polygon"]
 
 FORMAT_NAME = "stiffknots-chain"
 FORMAT_VERSION = 1
 
 
-def _as_coords(coords: Any) -> np.ndarray:
+def as_coords(coords: Any, name: str = "chain coordinates") -> np.ndarray:
+    """``coords`` (an array-like or a :class:`Chain`) as a C-contiguous float64 copy of shape
+    (N, 3) with finite values; ValueError naming ``name`` otherwise."""
+    if hasattr(coords, "coords") and hasattr(coords, "closed"):
+        coords = coords.coords
     try:
         arr = np.array(coords, dtype=np.float64, order="C", copy=True)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"chain coordinates must be numbers, shape (N, 3): {exc}") from None
+        raise ValueError(f"{name} must be numbers of shape (N, 3): {exc}") from None
     if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"chain coordinates must have shape (N, 3), got {arr.shape}")
+        raise ValueError(f"{name} must have shape (N, 3), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         bad = int(np.argwhere(~np.isfinite(arr))[0, 0])
-        raise ValueError(f"chain coordinates must be finite; bead {bad} is {arr[bad].tolist()}")
+        raise ValueError(f"{name} must be finite; bead {bad} is {arr[bad].tolist()}")
     return arr
 
 
@@ -76,7 +80,7 @@ class Chain:
     meta: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        self.coords = _as_coords(self.coords)
+        self.coords = as_coords(self.coords)
         self.closed = bool(self.closed)
         if self.meta is None:
             self.meta = {}

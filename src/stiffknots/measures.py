@@ -72,6 +72,14 @@ def bending_energy(coords, closed):
     return e
 
 
+@njit(cache=True, inline="always")
+def _cross_into(out, k, ax, ay, az, bx, by, bz):
+    """Row k of ``out`` = a × b."""
+    out[k, 0] = ay * bz - az * by
+    out[k, 1] = az * bx - ax * bz
+    out[k, 2] = ax * by - ay * bx
+
+
 @njit(cache=True)
 def writhe(coords, closed):
     """Writhe of a polygon by the exact Gauss integral (Klenin & Langowski, Biopolymers 2000).
@@ -101,22 +109,10 @@ def writhe(coords, closed):
             r14x, r14y, r14z = p4x - p1x, p4y - p1y, p4z - p1z
             r23x, r23y, r23z = p3x - p2x, p3y - p2y, p3z - p2z
             r24x, r24y, r24z = p4x - p2x, p4y - p2y, p4z - p2z
-            # n1 = r13 x r14
-            nv[0, 0] = r13y * r14z - r13z * r14y
-            nv[0, 1] = r13z * r14x - r13x * r14z
-            nv[0, 2] = r13x * r14y - r13y * r14x
-            # n2 = r14 x r24
-            nv[1, 0] = r14y * r24z - r14z * r24y
-            nv[1, 1] = r14z * r24x - r14x * r24z
-            nv[1, 2] = r14x * r24y - r14y * r24x
-            # n3 = r24 x r23
-            nv[2, 0] = r24y * r23z - r24z * r23y
-            nv[2, 1] = r24z * r23x - r24x * r23z
-            nv[2, 2] = r24x * r23y - r24y * r23x
-            # n4 = r23 x r13
-            nv[3, 0] = r23y * r13z - r23z * r13y
-            nv[3, 1] = r23z * r13x - r23x * r13z
-            nv[3, 2] = r23x * r13y - r23y * r13x
+            _cross_into(nv, 0, r13x, r13y, r13z, r14x, r14y, r14z)  # n1 = r13 × r14
+            _cross_into(nv, 1, r14x, r14y, r14z, r24x, r24y, r24z)  # n2 = r14 × r24
+            _cross_into(nv, 2, r24x, r24y, r24z, r23x, r23y, r23z)  # n3 = r24 × r23
+            _cross_into(nv, 3, r23x, r23y, r23z, r13x, r13y, r13z)  # n4 = r23 × r13
             degenerate = False
             for k in range(4):
                 nn = math.sqrt(nv[k, 0] ** 2 + nv[k, 1] ** 2 + nv[k, 2] ** 2)

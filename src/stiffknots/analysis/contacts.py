@@ -39,6 +39,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
+from stiffknots.chain import as_coords as chain_coords
+
 __all__ = [
     "DEFAULT_D",
     "DEFAULT_CONTACT_FACTOR",
@@ -75,17 +77,7 @@ def as_coords(coords: Any, closed: bool = True, *, name: str = "coords") -> np.n
     ValueError
         Not numbers, wrong shape, non-finite values, too few beads.
     """
-    if hasattr(coords, "coords") and hasattr(coords, "closed"):
-        coords = coords.coords
-    try:
-        arr = np.array(coords, dtype=np.float64, order="C", copy=True)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numbers of shape (N, 3): {exc}") from None
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (N, 3), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.argwhere(~np.isfinite(arr))[0, 0])
-        raise ValueError(f"{name} must be finite; bead {bad} is {arr[bad].tolist()}")
+    arr = chain_coords(coords, name)
     nmin = 4 if closed else 3
     if arr.shape[0] < nmin:
         kind = "closed" if closed else "open"

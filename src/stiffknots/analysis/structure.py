@@ -584,10 +584,7 @@ def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
 
     Parameters
     ----------
-    coords : array_like, shape (N, 3)
-        Bead positions.
-    closed : bool, default True
-        Closed or open chain.
+    coords, closed : the chain (bead positions, shape (N, 3)) and whether it is closed.
     d, factor, cutoff, min_sep :
         Contact rule, see :func:`~stiffknots.analysis.contacts.contact_map`.
     min_length : float, optional

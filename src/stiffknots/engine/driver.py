@@ -152,6 +152,16 @@ class AnnealSettings:
         return d
 
 
+class _Trace:
+    """Read-only attribute ``trace_<key>`` for ``traces[<key>]``."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.key = name.removeprefix("trace_")
+
+    def __get__(self, obj, owner=None):
+        return self if obj is None else obj.traces[self.key]
+
+
 @dataclass
 class ReplicaResult:
     """Outcome of one replica's run (plain data; picklable, JSON-able but for the arrays).
@@ -193,21 +203,11 @@ class ReplicaResult:
     total_energy: float | None = None
     version: str = __version__
 
-    @property
-    def trace_moves(self) -> np.ndarray:
-        return self.traces["moves"]
-
-    @property
-    def trace_temperature(self) -> np.ndarray:
-        return self.traces["temperature"]
-
-    @property
-    def trace_epsilon(self) -> np.ndarray:
-        return self.traces["epsilon"]
-
-    @property
-    def trace_seconds(self) -> np.ndarray:
-        return self.traces["seconds"]
+    # ``r.trace_moves`` … ``r.trace_seconds`` read ``r.traces``
+    trace_moves = _Trace()
+    trace_temperature = _Trace()
+    trace_epsilon = _Trace()
+    trace_seconds = _Trace()
 
     def summary(self) -> dict:
         """Every field but the coordinates and the traces."""

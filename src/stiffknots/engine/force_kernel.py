@@ -128,7 +128,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from stiffknots.engine.prims import (
@@ -149,17 +148,19 @@ from stiffknots.engine.prims import (
     I_MODE,
     I_POWER,
     _axis_dist2,
+    _cell_range,
     _de3,
+    _draw_angle,
     _hash,
     _metropolis_jac,
     _move_scale,
     _next,
+    _pair_blocked,
     _rehash,
     _rodrigues,
     _segment_blocked,
     _turn_blocked,
 )
-from stiffknots.geometry import seg_dist2
 
 # counter classes (``cnt[C_* + cls]``)
 CLS_TOP = 0
@@ -167,10 +168,12 @@ CLS_BOTTOM = 1
 
 
 @njit(cache=True, inline="always")
-def _commit_end(pos, newpos, count, base, step, top, fpar, head, nxt, prv, bucket, inv, mask):
+def _commit_end(pos, newpos, count, base, step, top, fpar, head, nxt, prv, bucket, inv, mask,
+                cnt, cls, de):
     """Write an accepted end move: ``count`` beads from ``newpos`` (bead base + k·step), the
     slab bound of the moved end, and the cell of every segment that starts at a moved bead
-    counted from that end."""
+    counted from that end; count the acceptance. Returns the move's ΔE ``de``."""
+    cnt[C_ACCEPTED + cls] += 1
     n = pos.shape[0]
     for k in range(count):
         b = base + k * step
@@ -184,19 +187,64 @@ def _commit_end(pos, newpos, count, base, step, top, fpar, head, nxt, prv, bucke
     for q in range(count):
         v = (n - 2 - q) if top else q
         _rehash(pos, v, v + 1, inv, mask, head, nxt, prv, bucket)
+    return de
 
 
 @njit(cache=True, inline="always")
-def _end_params(ipar, fpar, head):
-    """The parameters both end-move kernels read: exclusion mode, energy mode, power and scale,
-    curvature limit, displacement scales, exclusion distances, cell geometry."""
+def _end_params(ipar, fpar, head, temperature, rng, m_max, cap1, cap2):
+    """What both end-move kernels read: exclusion mode, energy mode, power and scale, curvature
+    limit, displacement scales, exclusion distances, cell geometry, 1/T, the generator, and
+    ``m_max`` capped at ``cap1`` and ``cap2``."""
     l_cap = fpar[F_LCAP]
     l_min = fpar[F_LMIN]
     log_span = math.log(l_cap / l_min) if l_cap > l_min else 0.0
     d = fpar[F_D]
     w = fpar[F_W]
+    beta = 1.0 / temperature if temperature > 0.0 else 0.0
     return (ipar[I_MODE], ipar[I_EMODE], ipar[I_POWER], fpar[F_EINV], fpar[F_CMIN], l_cap,
-            log_span, d, d * d, w, w * w, 1.0 / fpar[F_CELL], head.shape[0] - 1)
+            log_span, d, d * d, w, w * w, 1.0 / fpar[F_CELL], head.shape[0] - 1, beta,
+            rng[0], rng[1], rng[2], rng[3], min(m_max, cap1, cap2))
+
+
+@njit(cache=True, inline="always")
+def _end_accept(o1, n1, o2, n2, o3, n3, cmin, emode, power, escale, work, beta, j_old, j_new,
+                cnt, cls, s0, s1, s2, s3):
+    """The energy test of an end move that changes three joints (old/new cosines o, n): the
+    curvature limit, ΔE = ΔE_d − F·sg·Δ (``work`` = F·sg·Δ), Metropolis with the Jacobian
+    ratio j_old/j_new; counts the moves that pass. Returns (accept, ΔE, generator state)."""
+    if cmin > -1.0 and (_turn_blocked(cmin, o1, n1) or _turn_blocked(cmin, o2, n2)
+                        or _turn_blocked(cmin, o3, n3)):
+        return False, 0.0, s0, s1, s2, s3
+    de = _de3(o1, n1, o2, n2, o3, n3, emode, power, escale)
+    de -= work
+    ok, s0, s1, s2, s3 = _metropolis_jac(de, beta, j_old, j_new, s0, s1, s2, s3)
+    if ok:
+        cnt[C_ENERGY_OK + cls] += 1
+    return ok, de, s0, s1, s2, s3
+
+
+@njit(cache=True, inline="always")
+def _pick_end(n, cnt, s0, s1, s2, s3):
+    """Draw the end a move acts on (½ each) and count the attempt. Returns (top, cls, sg,
+    base, step, generator state): bead k from that end is chain bead base + step·k, and the
+    end segment points along sg·ẑ."""
+    u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+    top = u < 0.5
+    cls = CLS_TOP if top else CLS_BOTTOM
+    cnt[C_TRIED + cls] += 1
+    if top:
+        return top, cls, 1.0, n - 1, -1, s0, s1, s2, s3
+    return top, cls, -1.0, 0, 1, s0, s1, s2, s3
+
+
+@njit(cache=True, inline="always")
+def _below_end(pos, zen, sg, base, step, k0):
+    """True if every fixed bead k = k0 … N − 2 (from the moving end) lies strictly inside the
+    moving end's new height ``zen`` (the slab check of an inward end move)."""
+    for k in range(k0, pos.shape[0] - 1):
+        if sg * (zen - pos[base + k * step, 2]) <= 0.0:
+            return False
+    return True
 
 
 @njit(cache=True, inline="always")
@@ -210,14 +258,8 @@ def _moving_pair_blocked(pax, pay, paz, pbx, pby, pbz, qax, qay, qaz, qbx, qby, 
     mz = 0.5 * (paz + pbz - qaz - qbz)
     if mx * mx + my * my + mz * mz > lim_mid2:
         return False
-    dn2 = seg_dist2(pax, pay, paz, pbx, pby, pbz, qax, qay, qaz, qbx, qby, qbz)
-    if dn2 < w2:
-        return True
-    if dn2 <= lrel * lrel:
-        do2 = seg_dist2(oax, oay, oaz, obx, oby, obz, rax, ray, raz, rbx, rby, rbz)
-        if math.sqrt(do2) + math.sqrt(dn2) <= lrel:
-            return True
-    return False
+    return _pair_blocked(pax, pay, paz, pbx, pby, pbz, qax, qay, qaz, qbx, qby, qbz,
+                         oax, oay, oaz, obx, oby, obz, rax, ray, raz, rbx, rby, rbz, w2, lrel)
 
 
 @njit(cache=True, inline="always")
@@ -238,12 +280,7 @@ def _fixed_clash(pos, head, nxt, inv, mask, top, kfix, q, kinv, pax, pay, paz, p
     mx = 0.5 * (pax + pbx)
     my = 0.5 * (pay + pby)
     mz = 0.5 * (paz + pbz)
-    x0 = np.int64(math.floor((mx - reach) * inv))
-    x1 = np.int64(math.floor((mx + reach) * inv))
-    y0 = np.int64(math.floor((my - reach) * inv))
-    y1 = np.int64(math.floor((my + reach) * inv))
-    z0 = np.int64(math.floor((mz - reach) * inv))
-    z1 = np.int64(math.floor((mz + reach) * inv))
+    x0, x1, y0, y1, z0, z1 = _cell_range(mx, my, mz, reach, inv)
     for cx in range(x0, x1 + 1):
         for cy in range(y0, y1 + 1):
             for cz in range(z0, z1 + 1):
@@ -254,21 +291,15 @@ def _fixed_clash(pos, head, nxt, inv, mask, top, kfix, q, kinv, pax, pay, paz, p
                     if kv < kfix:  # moved: handled by the caller
                         v = nxt[v]
                         continue
-                    vx = pos[v, 0]
-                    vy = pos[v, 1]
-                    vz = pos[v, 2]
-                    wx = pos[v + 1, 0]
-                    wy = pos[v + 1, 1]
-                    wz = pos[v + 1, 2]
+                    vx, vy, vz = pos[v, 0], pos[v, 1], pos[v, 2]
+                    wx, wy, wz = pos[v + 1, 0], pos[v + 1, 1], pos[v + 1, 2]
                     if mode == 0:
                         for f in range(2):
                             kf = kv + f
                             if kf - q < 2 or kf == kinv:
                                 continue  # bonded, or a distance the move keeps
                             fb = (n - 1 - kf) if top else kf
-                            ddx = pos[fb, 0] - pax
-                            ddy = pos[fb, 1] - pay
-                            ddz = pos[fb, 2] - paz
+                            ddx, ddy, ddz = pos[fb, 0] - pax, pos[fb, 1] - pay, pos[fb, 2] - paz
                             if ddx * ddx + ddy * ddy + ddz * ddz < d2:
                                 return True
                     if kv != q + 1 and _segment_blocked(
@@ -306,38 +337,22 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
     float : the total change of E_d − F·Δz over the accepted moves.
     """
     n = pos.shape[0]
-    (mode, emode, power, escale, cmin, l_cap, log_span, d, d2, w, w2, inv,
-     mask) = _end_params(ipar, fpar, head)
-    if m_max > n - 4:
-        m_max = n - 4
-    if m_max > newpos.shape[0] - 2:
-        m_max = newpos.shape[0] - 2
+    # the pivot needs rows k = 0 … m + 1 of newpos
+    (mode, emode, power, escale, cmin, l_cap, log_span, d, d2, w, w2, inv, mask, beta, s0, s1,
+     s2, s3, m_max) = _end_params(ipar, fpar, head, temperature, rng, m_max, n - 4,
+                                  newpos.shape[0] - 2)
     if m_max < 1:
         return 0.0
     phi_max = fpar[F_PHIMAX]
-    beta = 1.0 / temperature if temperature > 0.0 else 0.0
     de_total = 0.0
-    s0, s1, s2, s3 = rng[0], rng[1], rng[2], rng[3]
 
     for _it in range(n_moves):
         # ---- propose -------------------------------------------------------------------
-        u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        top = u < 0.5
-        cls = CLS_TOP if top else CLS_BOTTOM
-        cnt[C_TRIED + cls] += 1
+        top, cls, sg, base, step, s0, s1, s2, s3 = _pick_end(n, cnt, s0, s1, s2, s3)
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
         m = 1 + int(u * m_max)
         if m > m_max:
             m = m_max
-        # chain index of bead k is base + step·k
-        if top:
-            sg = 1.0
-            base = n - 1
-            step = -1
-        else:
-            sg = -1.0
-            base = 0
-            step = 1
         e0 = base
         e1 = base + step
         b2 = base + 2 * step
@@ -353,9 +368,7 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
         sxy = math.sqrt(max(0.0, 1.0 - ez * ez))
         ex = sxy * math.cos(az)
         ey = sxy * math.sin(az)
-        jx = pos[piv, 0]
-        jy = pos[piv, 1]
-        jz = pos[piv, 2]
+        jx, jy, jz = pos[piv, 0], pos[piv, 1], pos[piv, 2]
         rho2 = 0.0
         for k in range(2, m + 2):
             b = base + k * step
@@ -363,13 +376,7 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
             if r2 > rho2:
                 rho2 = r2
         rho = math.sqrt(rho2)
-        u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        scale = _move_scale(u, l_cap, log_span)
-        lim = phi_max
-        if rho * lim > scale:
-            lim = scale / rho
-        u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        phi = (2.0 * u - 1.0) * lim
+        phi, s0, s1, s2, s3 = _draw_angle(rho, phi_max, l_cap, log_span, s0, s1, s2, s3)
         c = math.cos(phi)
         s = math.sin(phi)
         oc = 1.0 - c
@@ -395,13 +402,9 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
         # ---- energy: joints at k = 1 (cosine h), k = 2 and the pivot --------------------
         k3 = base + 3 * step
         if m >= 2:
-            n3x = newpos[3, 0]
-            n3y = newpos[3, 1]
-            n3z = newpos[3, 2]
+            n3x, n3y, n3z = newpos[3, 0], newpos[3, 1], newpos[3, 2]
         else:  # bead k = 3 is the pivot
-            n3x = jx
-            n3y = jy
-            n3z = jz
+            n3x, n3y, n3z = jx, jy, jz
         old2 = ((pos[b2, 0] - pos[e1, 0]) * (pos[k3, 0] - pos[b2, 0])
                 + (pos[b2, 1] - pos[e1, 1]) * (pos[k3, 1] - pos[b2, 1])
                 + (pos[b2, 2] - pos[e1, 2]) * (pos[k3, 2] - pos[b2, 2]))
@@ -410,23 +413,16 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
                 + (newpos[2, 2] - newpos[1, 2]) * (n3z - newpos[2, 2]))
         bl = base + (m + 1) * step  # last rotated bead
         pn = base + (m + 3) * step  # fixed bead beyond the pivot
-        fx = pos[pn, 0] - jx
-        fy = pos[pn, 1] - jy
-        fz = pos[pn, 2] - jz
+        fx, fy, fz = pos[pn, 0] - jx, pos[pn, 1] - jy, pos[pn, 2] - jz
         oldp = (jx - pos[bl, 0]) * fx + (jy - pos[bl, 1]) * fy + (jz - pos[bl, 2]) * fz
         newp = ((jx - newpos[m + 1, 0]) * fx + (jy - newpos[m + 1, 1]) * fy
                 + (jz - newpos[m + 1, 2]) * fz)
-        if cmin > -1.0 and (_turn_blocked(cmin, h_old, h_new)
-                            or _turn_blocked(cmin, old2, new2)
-                            or _turn_blocked(cmin, oldp, newp)):
-            continue
-        de = _de3(h_old, h_new, old2, new2, oldp, newp, emode, power, escale)
-        de -= force * sg * dlt
         # Metropolis with the Jacobian h/h' of the re-attachment (module docstring)
-        ok, s0, s1, s2, s3 = _metropolis_jac(de, beta, h_old, h_new, s0, s1, s2, s3)
+        ok, de, s0, s1, s2, s3 = _end_accept(h_old, h_new, old2, new2, oldp, newp, cmin, emode,
+                                             power, escale, force * sg * dlt, beta, h_old,
+                                             h_new, cnt, cls, s0, s1, s2, s3)
         if not ok:
             continue
-        cnt[C_ENERGY_OK + cls] += 1
         # ---- strand-passage guard and exclusion ----------------------------------------
         lrot = abs(phi) * rho
         adl = abs(dlt)
@@ -449,10 +445,7 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
             elif sg * (zeo - zo) + sg * (zen - zn) <= lrot + adl:
                 ok = False
         if ok and sg * dlt < 0.0:
-            for k in range(m + 2, n - 1):
-                if sg * (zen - pos[base + k * step, 2]) <= 0.0:
-                    ok = False
-                    break
+            ok = _below_end(pos, zen, sg, base, step, m + 2)
         if not ok:
             continue
         # (C) moved segments that move differently; (D) end beads against rotated beads
@@ -464,17 +457,11 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
             # rotated segment q: beads k = q, q + 1 (q + 1 = pivot when q = m + 1)
             bq = base + q * step
             bq1 = bq + step
-            pax = newpos[q, 0]
-            pay = newpos[q, 1]
-            paz = newpos[q, 2]
+            pax, pay, paz = newpos[q, 0], newpos[q, 1], newpos[q, 2]
             if q + 1 <= m + 1:
-                pbx = newpos[q + 1, 0]
-                pby = newpos[q + 1, 1]
-                pbz = newpos[q + 1, 2]
+                pbx, pby, pbz = newpos[q + 1, 0], newpos[q + 1, 1], newpos[q + 1, 2]
             else:
-                pbx = jx
-                pby = jy
-                pbz = jz
+                pbx, pby, pbz = jx, jy, jz
             if mode == 0:
                 for ke in range(2):
                     if q - ke >= 2:
@@ -485,27 +472,21 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
                             ok = False
             if not ok:
                 break
-            # against the end segment 0 (beads k = 0, 1)
-            if _moving_pair_blocked(pax, pay, paz, pbx, pby, pbz,
-                                    newpos[0, 0], newpos[0, 1], newpos[0, 2],
-                                    newpos[1, 0], newpos[1, 1], newpos[1, 2],
-                                    pos[bq, 0], pos[bq, 1], pos[bq, 2],
-                                    pos[bq1, 0], pos[bq1, 1], pos[bq1, 2],
-                                    pos[e0, 0], pos[e0, 1], pos[e0, 2],
-                                    pos[e1, 0], pos[e1, 1], pos[e1, 2],
-                                    lim_mm2, w2, lrel):
-                ok = False
-                break
-            # against segment 1 (beads k = 1, 2), which shares bead 2 with segment 2
-            if q >= 3 and _moving_pair_blocked(pax, pay, paz, pbx, pby, pbz,
-                                               newpos[1, 0], newpos[1, 1], newpos[1, 2],
-                                               newpos[2, 0], newpos[2, 1], newpos[2, 2],
-                                               pos[bq, 0], pos[bq, 1], pos[bq, 2],
-                                               pos[bq1, 0], pos[bq1, 1], pos[bq1, 2],
-                                               pos[e1, 0], pos[e1, 1], pos[e1, 2],
-                                               pos[b2, 0], pos[b2, 1], pos[b2, 2],
-                                               lim_mm2, w2, lrel):
-                ok = False
+            # against the end segment 0 (beads k = 0, 1), then segment 1 (beads k = 1, 2),
+            # which shares bead 2 with segment 2 (so only for q ≥ 3)
+            for g in range(2 if q >= 3 else 1):
+                ga = base + g * step  # chain index of bead k = g
+                if _moving_pair_blocked(pax, pay, paz, pbx, pby, pbz,
+                                        newpos[g, 0], newpos[g, 1], newpos[g, 2],
+                                        newpos[g + 1, 0], newpos[g + 1, 1], newpos[g + 1, 2],
+                                        pos[bq, 0], pos[bq, 1], pos[bq, 2],
+                                        pos[bq1, 0], pos[bq1, 1], pos[bq1, 2],
+                                        pos[ga, 0], pos[ga, 1], pos[ga, 2],
+                                        pos[ga + step, 0], pos[ga + step, 1], pos[ga + step, 2],
+                                        lim_mm2, w2, lrel):
+                    ok = False
+                    break
+            if not ok:
                 break
         if not ok:
             continue
@@ -514,13 +495,9 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
             bq = base + q * step
             bq1 = bq + step
             if q + 1 <= m + 1:
-                pbx = newpos[q + 1, 0]
-                pby = newpos[q + 1, 1]
-                pbz = newpos[q + 1, 2]
+                pbx, pby, pbz = newpos[q + 1, 0], newpos[q + 1, 1], newpos[q + 1, 2]
             else:
-                pbx = jx
-                pby = jy
-                pbz = jz
+                pbx, pby, pbz = jx, jy, jz
             if _fixed_clash(pos, head, nxt, inv, mask, top, m + 2, q,
                             m + 2 if q >= 2 else -1,
                             newpos[q, 0], newpos[q, 1], newpos[q, 2], pbx, pby, pbz,
@@ -529,12 +506,9 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
                             lmv, mode, d, w):
                 ok = False
                 break
-        if not ok:
-            continue
-        # ---- accept ----------------------------------------------------------------------
-        cnt[C_ACCEPTED + cls] += 1
-        de_total += de
-        _commit_end(pos, newpos, m + 2, base, step, top, fpar, head, nxt, prv, bucket, inv, mask)
+        if ok:  # accept
+            de_total += _commit_end(pos, newpos, m + 2, base, step, top, fpar, head, nxt, prv,
+                                    bucket, inv, mask, cnt, cls, de)
     rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
     return de_total
 
@@ -543,44 +517,25 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
 def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt, prv,
                     bucket, newpos, cnt, rng):
     """Attempt ``n_moves`` slide moves (module docstring, "The slide move") at
-    ``temperature`` and force F; arguments as for :func:`run_end_moves` (``m_max``: largest
-    number of translated free beads, capped at N − 5 and ``len(newpos) − 3``).
-
-    Returns
-    -------
-    float : the total change of E_d − F·Δz over the accepted moves.
-    """
+    ``temperature`` and force F and return the total change of E_d − F·Δz; arguments as for
+    :func:`run_end_moves` (``m_max``: largest number of translated free beads, capped at
+    N − 5 and ``len(newpos) − 3``)."""
     n = pos.shape[0]
-    (mode, emode, power, escale, cmin, l_cap, log_span, d, d2, w, w2, inv,
-     mask) = _end_params(ipar, fpar, head)
-    if m_max > n - 5:
-        m_max = n - 5
-    if m_max > newpos.shape[0] - 3:
-        m_max = newpos.shape[0] - 3
+    # the slide needs rows k = 0 … m + 2 of newpos
+    (mode, emode, power, escale, cmin, l_cap, log_span, d, d2, w, w2, inv, mask, beta, s0, s1,
+     s2, s3, m_max) = _end_params(ipar, fpar, head, temperature, rng, m_max, n - 5,
+                                  newpos.shape[0] - 3)
     if m_max < 0:
         return 0.0
-    beta = 1.0 / temperature if temperature > 0.0 else 0.0
     de_total = 0.0
-    s0, s1, s2, s3 = rng[0], rng[1], rng[2], rng[3]
 
     for _it in range(n_moves):
         # ---- propose -------------------------------------------------------------------
-        u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        top = u < 0.5
-        cls = CLS_TOP if top else CLS_BOTTOM
-        cnt[C_TRIED + cls] += 1
+        top, cls, sg, base, step, s0, s1, s2, s3 = _pick_end(n, cnt, s0, s1, s2, s3)
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
         m = int(u * (m_max + 1))
         if m > m_max:
             m = m_max
-        if top:
-            sg = 1.0
-            base = n - 1
-            step = -1
-        else:
-            sg = -1.0
-            base = 0
-            step = 1
         ia = base + (m + 1) * step  # last translated bead A
         ip = ia + step  # the re-placed bead P
         iq = ip + step  # fixed bead Q
@@ -589,65 +544,37 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
         scale = _move_scale(u, l_cap, log_span)
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
         dlt = (2.0 * u - 1.0) * scale
-        qx = pos[iq, 0]
-        qy = pos[iq, 1]
-        qz = pos[iq, 2]
+        qx, qy, qz = pos[iq, 0], pos[iq, 1], pos[iq, 2]
         # old circle: axis a = (A − Q)/D, P = Q + (D/2) a + r_c e
-        ax = pos[ia, 0] - qx
-        ay = pos[ia, 1] - qy
-        az = pos[ia, 2] - qz
+        ax, ay, az = pos[ia, 0] - qx, pos[ia, 1] - qy, pos[ia, 2] - qz
         dd = math.sqrt(ax * ax + ay * ay + az * az)
         # new circle: A' = A + δ ẑ
-        bx = ax
-        by = ay
-        bz = az + dlt
+        bx, by, bz = ax, ay, az + dlt
         dn = math.sqrt(bx * bx + by * by + bz * bz)
         if not (1e-9 < dd < 2.0 - 1e-9 and 1e-9 < dn < 2.0 - 1e-9):
             continue
-        ax /= dd
-        ay /= dd
-        az /= dd
-        bx /= dn
-        by /= dn
-        bz /= dn
-        ex = pos[ip, 0] - qx
-        ey = pos[ip, 1] - qy
-        ez = pos[ip, 2] - qz
+        ax, ay, az = ax / dd, ay / dd, az / dd
+        bx, by, bz = bx / dn, by / dn, bz / dn
+        ex, ey, ez = pos[ip, 0] - qx, pos[ip, 1] - qy, pos[ip, 2] - qz
         t = ex * ax + ey * ay + ez * az
-        ex -= t * ax
-        ey -= t * ay
-        ez -= t * az
+        ex, ey, ez = ex - t * ax, ey - t * ay, ez - t * az
         el = math.sqrt(ex * ex + ey * ey + ez * ez)
         if el < 1e-9:
             continue
-        ex /= el
-        ey /= el
-        ez /= el
+        ex, ey, ez = ex / el, ey / el, ez / el
         # e' = R e, R the smallest rotation taking a to a': R = I + [c]× + [c]×²/(1 + a·a')
-        cx = ay * bz - az * by
-        cy = az * bx - ax * bz
-        cz = ax * by - ay * bx
+        cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
         ca = ax * bx + ay * by + az * bz
         if ca <= -0.5:
             continue
-        kx = cy * ez - cz * ey
-        ky = cz * ex - cx * ez
-        kz = cx * ey - cy * ex
-        fx = cy * kz - cz * ky
-        fy = cz * kx - cx * kz
-        fz = cx * ky - cy * kx
+        kx, ky, kz = cy * ez - cz * ey, cz * ex - cx * ez, cx * ey - cy * ex
+        fx, fy, fz = cy * kz - cz * ky, cz * kx - cx * kz, cx * ky - cy * kx
         g = 1.0 / (1.0 + ca)
-        fx = ex + kx + fx * g
-        fy = ey + ky + fy * g
-        fz = ez + kz + fz * g
+        fx, fy, fz = ex + kx + fx * g, ey + ky + fy * g, ez + kz + fz * g
         t = fx * bx + fy * by + fz * bz
-        fx -= t * bx
-        fy -= t * by
-        fz -= t * bz
+        fx, fy, fz = fx - t * bx, fy - t * by, fz - t * bz
         el = math.sqrt(fx * fx + fy * fy + fz * fz)
-        fx /= el
-        fy /= el
-        fz /= el
+        fx, fy, fz = fx / el, fy / el, fz / el
         rc = math.sqrt(1.0 - 0.25 * dn * dn)
         # new positions: k = 0 … m + 1 translated, k = m + 2 is P'
         for k in range(m + 2):
@@ -668,40 +595,27 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
         newpos[m + 2, 2] = pz
         # ---- energy: joints at A, P and Q -----------------------------------------------
         ib = ia - step  # the bead before A (translated with it)
-        ux = pos[ia, 0] - pos[ib, 0]
-        uy = pos[ia, 1] - pos[ib, 1]
-        uz = pos[ia, 2] - pos[ib, 2]
+        ux, uy, uz = pos[ia, 0] - pos[ib, 0], pos[ia, 1] - pos[ib, 1], pos[ia, 2] - pos[ib, 2]
         olda = (ux * (pos[ip, 0] - pos[ia, 0]) + uy * (pos[ip, 1] - pos[ia, 1])
                 + uz * (pos[ip, 2] - pos[ia, 2]))
-        nax = newpos[m + 1, 0]
-        nay = newpos[m + 1, 1]
-        naz = newpos[m + 1, 2]
+        nax, nay, naz = newpos[m + 1, 0], newpos[m + 1, 1], newpos[m + 1, 2]
         newa = ux * (px - nax) + uy * (py - nay) + uz * (pz - naz)
         oldp = ((pos[ip, 0] - pos[ia, 0]) * (qx - pos[ip, 0])
                 + (pos[ip, 1] - pos[ia, 1]) * (qy - pos[ip, 1])
                 + (pos[ip, 2] - pos[ia, 2]) * (qz - pos[ip, 2]))
         newp = (px - nax) * (qx - px) + (py - nay) * (qy - py) + (pz - naz) * (qz - pz)
-        vx = pos[ir, 0] - qx
-        vy = pos[ir, 1] - qy
-        vz = pos[ir, 2] - qz
+        vx, vy, vz = pos[ir, 0] - qx, pos[ir, 1] - qy, pos[ir, 2] - qz
         oldq = (qx - pos[ip, 0]) * vx + (qy - pos[ip, 1]) * vy + (qz - pos[ip, 2]) * vz
         newq = (qx - px) * vx + (qy - py) * vy + (qz - pz) * vz
-        if cmin > -1.0 and (_turn_blocked(cmin, olda, newa)
-                            or _turn_blocked(cmin, oldp, newp)
-                            or _turn_blocked(cmin, oldq, newq)):
-            continue
-        de = _de3(olda, newa, oldp, newp, oldq, newq, emode, power, escale)
-        de -= force * sg * dlt
         # Metropolis with the Jacobian D/D' of the circle (module docstring)
-        ok, s0, s1, s2, s3 = _metropolis_jac(de, beta, dd, dn, s0, s1, s2, s3)
+        ok, de, s0, s1, s2, s3 = _end_accept(olda, newa, oldp, newp, oldq, newq, cmin, emode,
+                                             power, escale, force * sg * dlt, beta, dd, dn, cnt,
+                                             cls, s0, s1, s2, s3)
         if not ok:
             continue
-        cnt[C_ENERGY_OK + cls] += 1
         # ---- strand-passage guard and exclusion ----------------------------------------
         ltr = abs(dlt)
-        ddx = px - pos[ip, 0]
-        ddy = py - pos[ip, 1]
-        ddz = pz - pos[ip, 2]
+        ddx, ddy, ddz = px - pos[ip, 0], py - pos[ip, 1], pz - pos[ip, 2]
         lp = math.sqrt(ddx * ddx + ddy * ddy + ddz * ddz)
         lmv = ltr if ltr > lp else lp
         lrel = lmv + ltr
@@ -717,10 +631,7 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
                     ok = False
                     break
             if ok:
-                for k in range(m + 3, n - 1):
-                    if sg * (zen - pos[base + k * step, 2]) <= 0.0:
-                        ok = False
-                        break
+                ok = _below_end(pos, zen, sg, base, step, m + 3)
         if not ok:
             continue
         # (C) segments m + 1 (A–P) and m + 2 (P–Q) against the translated segments;
@@ -730,9 +641,7 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
             b = base + q * step
             b1 = b + step
             if mode == 0 and m + 2 - q >= 2:
-                hx = newpos[q, 0] - px
-                hy = newpos[q, 1] - py
-                hz = newpos[q, 2] - pz
+                hx, hy, hz = newpos[q, 0] - px, newpos[q, 1] - py, newpos[q, 2] - pz
                 if hx * hx + hy * hy + hz * hz < d2:
                     ok = False
                     break
@@ -761,13 +670,9 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
             b = base + q * step
             b1 = b + step
             if q <= m + 1:
-                qbx = newpos[q + 1, 0]
-                qby = newpos[q + 1, 1]
-                qbz = newpos[q + 1, 2]
+                qbx, qby, qbz = newpos[q + 1, 0], newpos[q + 1, 1], newpos[q + 1, 2]
             else:
-                qbx = qx
-                qby = qy
-                qbz = qz
+                qbx, qby, qbz = qx, qy, qz
             if _fixed_clash(pos, head, nxt, inv, mask, top, m + 3, q, -1,
                             newpos[q, 0], newpos[q, 1], newpos[q, 2], qbx, qby, qbz,
                             pos[b, 0], pos[b, 1], pos[b, 2], pos[b1, 0], pos[b1, 1], pos[b1, 2],
@@ -777,8 +682,7 @@ def run_slide_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, n
         if not ok:
             continue
         # ---- accept ----------------------------------------------------------------------
-        cnt[C_ACCEPTED + cls] += 1
-        de_total += de
-        _commit_end(pos, newpos, m + 3, base, step, top, fpar, head, nxt, prv, bucket, inv, mask)
+        de_total += _commit_end(pos, newpos, m + 3, base, step, top, fpar, head, nxt, prv,
+                                bucket, inv, mask, cnt, cls, de)
     rng[0], rng[1], rng[2], rng[3] = s0, s1, s2, s3
     return de_total

@@ -80,7 +80,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from stiffknots.engine.prims import (  # noqa: F401 (re-exported: the kernel's public names)
@@ -108,7 +107,9 @@ from stiffknots.engine.prims import (  # noqa: F401 (re-exported: the kernel's p
     I_OPEN,
     I_POWER,
     _axis_dist2,
+    _cell_range,
     _de2,
+    _draw_angle,
     _hash,
     _metropolis,
     _move_scale,
@@ -208,18 +209,12 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
         k = j + m + 1
         if k >= n:
             k -= n
-        jx = pos[j, 0]
-        jy = pos[j, 1]
-        jz = pos[j, 2]
-        ex = pos[k, 0] - jx
-        ey = pos[k, 1] - jy
-        ez = pos[k, 2] - jz
+        jx, jy, jz = pos[j, 0], pos[j, 1], pos[j, 2]
+        ex, ey, ez = pos[k, 0] - jx, pos[k, 1] - jy, pos[k, 2] - jz
         el = math.sqrt(ex * ex + ey * ey + ez * ez)
         if el < 1e-9:
             continue
-        ex /= el
-        ey /= el
-        ez /= el
+        ex, ey, ez = ex / el, ey / el, ez / el
         # largest distance of a moved bead from the axis (invariant under the move)
         rho2 = 0.0
         for q in range(m):
@@ -241,15 +236,7 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
                 s = -sd
                 phi = delta
         else:
-            # displacement scale log-uniform in [l_min, l_cap]: large moves early, fine
-            # ones late (a mixture of symmetric proposals is symmetric)
-            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-            scale = _move_scale(u, l_cap, log_span)
-            lim = phi_max
-            if rho * lim > scale:
-                lim = scale / rho
-            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-            phi = (2.0 * u - 1.0) * lim
+            phi, s0, s1, s2, s3 = _draw_angle(rho, phi_max, l_cap, log_span, s0, s1, s2, s3)
             c = math.cos(phi)
             s = math.sin(phi)
             phi = abs(phi)
@@ -266,17 +253,11 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
         kp = k + 1 if k < n - 1 else 0
         b1 = j + 1 if j < n - 1 else 0  # first moved bead
         bm = k - 1 if k > 0 else n - 1  # last moved bead
-        ax = jx - pos[jm, 0]
-        ay = jy - pos[jm, 1]
-        az = jz - pos[jm, 2]
+        ax, ay, az = jx - pos[jm, 0], jy - pos[jm, 1], jz - pos[jm, 2]
         old1 = ax * (pos[b1, 0] - jx) + ay * (pos[b1, 1] - jy) + az * (pos[b1, 2] - jz)
         new1 = ax * (newpos[0, 0] - jx) + ay * (newpos[0, 1] - jy) + az * (newpos[0, 2] - jz)
-        kx = pos[k, 0]
-        ky = pos[k, 1]
-        kz = pos[k, 2]
-        bx = pos[kp, 0] - kx
-        by = pos[kp, 1] - ky
-        bz = pos[kp, 2] - kz
+        kx, ky, kz = pos[k, 0], pos[k, 1], pos[k, 2]
+        bx, by, bz = pos[kp, 0] - kx, pos[kp, 1] - ky, pos[kp, 2] - kz
         old2 = (kx - pos[bm, 0]) * bx + (ky - pos[bm, 1]) * by + (kz - pos[bm, 2]) * bz
         new2 = (
             (kx - newpos[m - 1, 0]) * bx
@@ -314,25 +295,15 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             b = j + 1 + q
             if b >= n:
                 b -= n
-            px = newpos[q, 0]
-            py = newpos[q, 1]
-            pz = newpos[q, 2]
+            px, py, pz = newpos[q, 0], newpos[q, 1], newpos[q, 2]
             # previous bead (moved or pivot j), new position
             if q == 0:
-                ppx = jx
-                ppy = jy
-                ppz = jz
-                opx = jx
-                opy = jy
-                opz = jz
+                ppx, ppy, ppz = jx, jy, jz
+                opx, opy, opz = jx, jy, jz
             else:
-                ppx = newpos[q - 1, 0]
-                ppy = newpos[q - 1, 1]
-                ppz = newpos[q - 1, 2]
+                ppx, ppy, ppz = newpos[q - 1, 0], newpos[q - 1, 1], newpos[q - 1, 2]
                 bb = b - 1 if b > 0 else n - 1
-                opx = pos[bb, 0]
-                opy = pos[bb, 1]
-                opz = pos[bb, 2]
+                opx, opy, opz = pos[bb, 0], pos[bb, 1], pos[bb, 2]
             last = q == m - 1
             # moved segment A = (b-1, b), and for the last moved bead also B = (b, k)
             amx = 0.5 * (ppx + px)
@@ -344,12 +315,7 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
             sa = b - 1 if b > 0 else n - 1  # index of segment A
             # cells overlapping the cube [p - reach, p + reach]: at most 2 per axis when
             # the cell side is ≥ reach (the usual case), exact in every case
-            x0 = np.int64(math.floor((px - reach) * inv))
-            x1 = np.int64(math.floor((px + reach) * inv))
-            y0 = np.int64(math.floor((py - reach) * inv))
-            y1 = np.int64(math.floor((py + reach) * inv))
-            z0 = np.int64(math.floor((pz - reach) * inv))
-            z1 = np.int64(math.floor((pz + reach) * inv))
+            x0, x1, y0, y1, z0, z1 = _cell_range(px, py, pz, reach, inv)
             for cx in range(x0, x1 + 1):
                 if not ok:
                     break
@@ -367,13 +333,9 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
                             if off <= m:  # moved segment: rigid with respect to A and B
                                 v = nxt[v]
                                 continue
-                            vx = pos[v, 0]
-                            vy = pos[v, 1]
-                            vz = pos[v, 2]
+                            vx, vy, vz = pos[v, 0], pos[v, 1], pos[v, 2]
                             v1 = v + 1 if v < n - 1 else 0
-                            wx = pos[v1, 0]
-                            wy = pos[v1, 1]
-                            wz = pos[v1, 2]
+                            wx, wy, wz = pos[v1, 0], pos[v1, 1], pos[v1, 2]
                             # bead rule: fixed bead v against moved bead b
                             if mode == 0:
                                 sep = v - b
@@ -382,9 +344,7 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
                                 if not is_open and n - sep < sep:
                                     sep = n - sep
                                 if sep >= 2:
-                                    ddx = vx - px
-                                    ddy = vy - py
-                                    ddz = vz - pz
+                                    ddx, ddy, ddz = vx - px, vy - py, vz - pz
                                     if ddx * ddx + ddy * ddy + ddz * ddz < d2:
                                         ok = False
                                         break

@@ -82,12 +82,18 @@ def cell_build(pos, cell, head, nxt, prv, bucket, is_open=False):
             np.int64(math.floor(mz * inv)),
             mask,
         )
-        bucket[v] = h
-        prv[v] = -1
-        nxt[v] = head[h]
-        if head[h] >= 0:
-            prv[head[h]] = v
-        head[h] = v
+        _cell_push(v, h, head, nxt, prv, bucket)
+
+
+@njit(cache=True, inline="always")
+def _cell_push(v, h, head, nxt, prv, bucket):
+    """Put segment v at the front of cell h's list."""
+    bucket[v] = h
+    prv[v] = -1
+    nxt[v] = head[h]
+    if head[h] >= 0:
+        prv[head[h]] = v
+    head[h] = v
 
 
 @njit(cache=True, inline="always")
@@ -104,13 +110,7 @@ def _cell_update(v, h, head, nxt, prv, bucket):
         head[old] = q
     if q >= 0:
         prv[q] = p
-    # push front
-    bucket[v] = h
-    prv[v] = -1
-    nxt[v] = head[h]
-    if head[h] >= 0:
-        prv[head[h]] = v
-    head[h] = v
+    _cell_push(v, h, head, nxt, prv, bucket)
 
 
 @njit(cache=True, inline="always")
@@ -124,6 +124,16 @@ def _joint_energy(c, emode, power, escale):
     return x ** power
 
 
+@njit(cache=True, inline="always")
+def _joint_cos(pos, v, n):
+    """c = u·w at joint v: u the bond into bead v, w the bond out of it (cyclic indices)."""
+    a = v - 1 if v > 0 else n - 1
+    b = v + 1 if v < n - 1 else 0
+    return ((pos[v, 0] - pos[a, 0]) * (pos[b, 0] - pos[v, 0])
+            + (pos[v, 1] - pos[a, 1]) * (pos[b, 1] - pos[v, 1])
+            + (pos[v, 2] - pos[a, 2]) * (pos[b, 2] - pos[v, 2]))
+
+
 @njit(cache=True)
 def energy_chain(pos, is_open=False, emode=0, power=1, escale=1.0):
     """Σ_joints f(u_n·u_{n+1}) for a unit-bond chain (f: see the module docstring), C = 1.
@@ -135,15 +145,7 @@ def energy_chain(pos, is_open=False, emode=0, power=1, escale=1.0):
     lo = 1 if is_open else 0
     hi = n - 1 if is_open else n
     for v in range(lo, hi):
-        a = v - 1 if v > 0 else n - 1
-        b = v + 1 if v < n - 1 else 0
-        ux = pos[v, 0] - pos[a, 0]
-        uy = pos[v, 1] - pos[a, 1]
-        uz = pos[v, 2] - pos[a, 2]
-        wx = pos[b, 0] - pos[v, 0]
-        wy = pos[b, 1] - pos[v, 1]
-        wz = pos[b, 2] - pos[v, 2]
-        e += _joint_energy(ux * wx + uy * wy + uz * wz, emode, power, escale)
+        e += _joint_energy(_joint_cos(pos, v, n), emode, power, escale)
     return e
 
 
@@ -161,11 +163,7 @@ def turning_cosines(pos, is_open=False):
     hi = n - 1 if is_open else n
     out = np.empty(hi - lo)
     for v in range(lo, hi):
-        a = v - 1 if v > 0 else n - 1
-        b = v + 1 if v < n - 1 else 0
-        out[v - lo] = ((pos[v, 0] - pos[a, 0]) * (pos[b, 0] - pos[v, 0])
-                       + (pos[v, 1] - pos[a, 1]) * (pos[b, 1] - pos[v, 1])
-                       + (pos[v, 2] - pos[a, 2]) * (pos[b, 2] - pos[v, 2]))
+        out[v - lo] = _joint_cos(pos, v, n)
     return out
 
 
@@ -228,11 +226,22 @@ def _segment_blocked(nax, nay, naz, nbx, nby, nbz, oax, oay, oaz, obx, oby, obz,
     ddz = mvz - mz
     if ddx * ddx + ddy * ddy + ddz * ddz > lim_mid2:
         return False  # too far apart for either test to fail
-    dn2 = seg_dist2(nax, nay, naz, nbx, nby, nbz, vx, vy, vz, wx, wy, wz)
+    return _pair_blocked(nax, nay, naz, nbx, nby, nbz, vx, vy, vz, wx, wy, wz,
+                         oax, oay, oaz, obx, oby, obz, vx, vy, vz, wx, wy, wz, w2, lmove)
+
+
+@njit(cache=True, inline="always")
+def _pair_blocked(pax, pay, paz, pbx, pby, pbz, qax, qay, qaz, qbx, qby, qbz,
+                  oax, oay, oaz, obx, oby, obz, rax, ray, raz, rbx, rby, rbz, w2, lmove):
+    """Segments P = pa–pb and Q = qa–qb after a move, O = oa–ob and R = ra–rb before it:
+    True if |PQ| < w (tube) or d_before + d_after ≤ L, the largest relative displacement of
+    their points along the move (then the pair might have crossed: the guard of
+    :mod:`stiffknots.engine.kernel`)."""
+    dn2 = seg_dist2(pax, pay, paz, pbx, pby, pbz, qax, qay, qaz, qbx, qby, qbz)
     if dn2 < w2:
         return True
     if dn2 <= lmove * lmove:
-        do2 = seg_dist2(oax, oay, oaz, obx, oby, obz, vx, vy, vz, wx, wy, wz)
+        do2 = seg_dist2(oax, oay, oaz, obx, oby, obz, rax, ray, raz, rbx, rby, rbz)
         if math.sqrt(do2) + math.sqrt(dn2) <= lmove:
             return True
     return False
@@ -259,6 +268,15 @@ def _rehash(pos, v, v1, inv, mask, head, nxt, prv, bucket):
         mask,
     )
     _cell_update(v, h, head, nxt, prv, bucket)
+
+
+@njit(cache=True, inline="always")
+def _cell_range(x, y, z, reach, inv):
+    """First and last cell index along x, y, z of the cells that overlap the cube
+    [p − reach, p + reach] around the point p (cells of side 1/inv)."""
+    return (np.int64(math.floor((x - reach) * inv)), np.int64(math.floor((x + reach) * inv)),
+            np.int64(math.floor((y - reach) * inv)), np.int64(math.floor((y + reach) * inv)),
+            np.int64(math.floor((z - reach) * inv)), np.int64(math.floor((z + reach) * inv)))
 
 
 @njit(cache=True, inline="always")
@@ -316,18 +334,22 @@ def _de3(o1, n1, o2, n2, o3, n3, emode, power, escale):
 
 
 @njit(cache=True, inline="always")
+def _boltzmann(x, s0, s1, s2, s3):
+    """Accept with probability e^{−x} (x > 0; never when x > 50). Returns (accept, state)."""
+    if x > 50.0:
+        return False, s0, s1, s2, s3
+    u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+    return u < math.exp(-x), s0, s1, s2, s3
+
+
+@njit(cache=True, inline="always")
 def _metropolis(de, beta, s0, s1, s2, s3):
     """Metropolis rule of a symmetric proposal: accept with min(1, e^{−βΔE}); β = 0 is a
     quench (ΔE ≤ 0 only). Draws a uniform only when it needs one. Returns (accept, state)."""
     if de > 0.0:
         if beta == 0.0:
             return False, s0, s1, s2, s3
-        x = de * beta
-        if x > 50.0:
-            return False, s0, s1, s2, s3
-        u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        if u >= math.exp(-x):
-            return False, s0, s1, s2, s3
+        return _boltzmann(de * beta, s0, s1, s2, s3)
     return True, s0, s1, s2, s3
 
 
@@ -341,11 +363,7 @@ def _metropolis_jac(de, beta, j_old, j_new, s0, s1, s2, s3):
     elif de > 0.0 or j_new > j_old:
         x = de * beta - math.log(j_old / j_new)
         if x > 0.0:
-            if x > 50.0:
-                return False, s0, s1, s2, s3
-            u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-            if u >= math.exp(-x):
-                return False, s0, s1, s2, s3
+            return _boltzmann(x, s0, s1, s2, s3)
     return True, s0, s1, s2, s3
 
 
@@ -353,6 +371,21 @@ def _metropolis_jac(de, beta, j_old, j_new, s0, s1, s2, s3):
 def _move_scale(u, l_cap, log_span):
     """Displacement scale ℓ = l_cap·e^{−u·log(l_cap/l_min)}: log-uniform in [l_min, l_cap]."""
     return l_cap * math.exp(-u * log_span)
+
+
+@njit(cache=True, inline="always")
+def _draw_angle(rho, phi_max, l_cap, log_span, s0, s1, s2, s3):
+    """A rotation angle of a multi-bead move: a displacement scale ℓ log-uniform in
+    [l_min, l_cap] (large moves early, fine ones late; a mixture of symmetric proposals is
+    symmetric), then φ uniform in ±min(φ_max, ℓ/ρ_max), so that no point moves farther than ℓ.
+    Returns (φ, generator state)."""
+    u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+    scale = _move_scale(u, l_cap, log_span)
+    lim = phi_max
+    if rho * lim > scale:
+        lim = scale / rho
+    u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+    return (2.0 * u - 1.0) * lim, s0, s1, s2, s3
 
 
 # ---- brute-force checks (O(N²); verification, not the hot loop) ------------------------------

@@ -460,21 +460,12 @@ def eighty_curve(spec: EightySpec, n_beads: int = 150) -> np.ndarray:
 def eighty_chain(spec: EightySpec, n_beads: int = 150, d_min: float = D_MIN) -> np.ndarray:
     """Closed unit-bond chain of ``n_beads`` beads along the 80 of ``spec`` (type not checked).
 
-    Parameters
-    ----------
-    spec : EightySpec
-    n_beads : int
-        Number of beads N (bond length 1).
-    d_min : float
-        Smallest distance allowed between non-bonded beads (paper: 1/√2).
-
-    Raises
-    ------
-    EmbeddingError
-        If the spec gives a link, or the chain cannot be made with ``n_beads`` beads, unit
-        bonds, safe chords, non-adjacent bead distances ≥ ``d_min`` and distances ≥ ``d_min``
-        between bonds that share no bead (so that the chain is a valid start under both the
-        bead and the tube exclusion rules of :class:`~stiffknots.engine.state.MoveParams`).
+    ``n_beads`` beads N of bond length 1, no two non-bonded beads closer than ``d_min``
+    (paper: 1/√2). Raises EmbeddingError if the spec gives a link, or the chain cannot be made
+    with ``n_beads`` beads, unit bonds, safe chords, non-adjacent bead distances ≥ ``d_min``
+    and distances ≥ ``d_min`` between bonds that share no bead (so that the chain is a valid
+    start under both the bead and the tube exclusion rules of
+    :class:`~stiffknots.engine.params.MoveParams`).
     """
     poly = eighty_curve(spec, int(n_beads))
     x = _scaled_chain(poly, int(n_beads))

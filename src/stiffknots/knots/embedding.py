@@ -53,6 +53,7 @@ from scipy.optimize import brentq
 
 from stiffknots.errors import EmbeddingError
 from stiffknots.geometry import seg_dist2
+from stiffknots.measures import min_bead_distance, min_segment_distance
 
 __all__ = [
     "EmbeddingError",
@@ -135,6 +136,16 @@ def _n_components(perm: np.ndarray) -> int:
     return c
 
 
+def _require_knot(word, n: int) -> None:
+    """EmbeddingError unless the closure of the braid ``word`` on ``n`` strands is a knot."""
+    comps = _n_components(braid_permutation(word, n))
+    if comps != 1:
+        raise EmbeddingError(
+            f"the closure of braid {word} on {n} strands is a link with {comps} components, "
+            "not a knot"
+        )
+
+
 # --------------------------------------------------------------------------------------------
 # smooth curve
 # --------------------------------------------------------------------------------------------
@@ -194,13 +205,7 @@ def braid_curve(
     n = _strands(word, n_strands)
     if not word:
         raise EmbeddingError("the empty braid closes to unlinked circles; use regular_polygon")
-    perm = braid_permutation(word, n)
-    comps = _n_components(perm)
-    if comps != 1:
-        raise EmbeddingError(
-            f"the closure of braid {word} on {n} strands is a link with {comps} components, "
-            "not a knot"
-        )
+    _require_knot(word, n)
     if samples_per_pass is None:
         samples_per_pass = max(400, 40 * len(word), int(8 * 2 * np.pi * radius))
     theta = np.arange(samples_per_pass) * (2 * np.pi / samples_per_pass)
@@ -345,37 +350,6 @@ def _isotopy_safe(x, dev):
 # --------------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
-def _min_nonadjacent(x):
-    """(min bead distance, min segment distance) over pairs at cyclic index distance >= 2."""
-    n = x.shape[0]
-    dmin2 = np.inf
-    smin2 = np.inf
-    for i in range(n):
-        for j in range(i + 2, n):
-            if i == 0 and j == n - 1:
-                continue
-            dx = x[i, 0] - x[j, 0]
-            dy = x[i, 1] - x[j, 1]
-            dz = x[i, 2] - x[j, 2]
-            d2 = dx * dx + dy * dy + dz * dz
-            if d2 < dmin2:
-                dmin2 = d2
-    for i in range(n):
-        i1 = (i + 1) % n
-        for j in range(i + 2, n):
-            j1 = (j + 1) % n
-            if j1 == i:
-                continue
-            d2 = seg_dist2(
-                x[i, 0], x[i, 1], x[i, 2], x[i1, 0], x[i1, 1], x[i1, 2],
-                x[j, 0], x[j, 1], x[j, 2], x[j1, 0], x[j1, 1], x[j1, 2],
-            )
-            if d2 < smin2:
-                smin2 = d2
-    return np.sqrt(dmin2), np.sqrt(smin2)
-
-
 @dataclass(frozen=True)
 class EmbeddingReport:
     """Quality of a closed chain: bonds, exclusion distances."""
@@ -396,7 +370,7 @@ def embedding_report(coords: np.ndarray) -> EmbeddingReport:
     if len(x) < 4:
         dmin = smin = np.inf
     else:
-        dmin, smin = _min_nonadjacent(x)
+        dmin, smin = min_bead_distance(x, True, 2), min_segment_distance(x, True)
     return EmbeddingReport(len(x), float(np.max(np.abs(bonds - 1.0))), float(dmin), float(smin))
 
 
@@ -553,13 +527,7 @@ def embed_braid(
     if n_beads < 3:
         raise EmbeddingError(f"a closed chain needs at least 3 beads, not n_beads={n_beads}")
     if word:
-        perm = braid_permutation(word, n)
-        comps = _n_components(perm)
-        if comps != 1:
-            raise EmbeddingError(
-                f"the closure of braid {word} on {n} strands is a link with {comps} components, "
-                "not a knot"
-            )
+        _require_knot(word, n)
     elif n > 1 and n_strands is not None:
         raise EmbeddingError(f"the empty braid on {n} strands is an unlink of {n} circles")
     x = _embed_checked(word, n, n_beads, d_min, gap)

@@ -206,20 +206,10 @@ def close_open_chain_along_z(coords, far: float | None = None) -> np.ndarray:
     top, bot = hi[2] + far, lo[2] - far
     side = hi[0] + far
     first, last = x[0], x[-1]
-    if last[2] >= first[2]:  # chain runs upwards: the last end goes to +z
-        tail = [
-            [last[0], last[1], top],
-            [side, last[1], top],
-            [side, first[1], bot],
-            [first[0], first[1], bot],
-        ]
-        return np.vstack([x, np.asarray(tail)])
-    tail = [
-        [last[0], last[1], bot],
-        [side, last[1], bot],
-        [side, first[1], top],
-        [first[0], first[1], top],
-    ]
+    # a chain that runs upwards sends its last end to +z, one that runs downwards to −z
+    z_last, z_first = (top, bot) if last[2] >= first[2] else (bot, top)
+    tail = [[last[0], last[1], z_last], [side, last[1], z_last],
+            [side, first[1], z_first], [first[0], first[1], z_first]]
     return np.vstack([x, np.asarray(tail)])
 
 

@@ -35,12 +35,14 @@ from stiffknots.engine.driver import (
     AnnealSettings,
     ReplicaResult,
     default_workers,
+    replica_seeds,
     run_replica,
 )
 from stiffknots.engine.tempering import run_tempering
 from stiffknots.errors import TopologyChangedError
 from stiffknots.fileio import write_bytes, write_json
 from stiffknots.formats import save
+from stiffknots.problems import validate as V
 from stiffknots.problems.pool import run_jobs
 
 
@@ -134,21 +136,12 @@ class ReplicaSet:
         return {"epsilon": self.best.epsilon if self.replicas else None}
 
     def to_dict(self) -> dict:
-        return {
-            "problem": self.problem,
-            "knot": self.knot,
-            "beads": self.beads,
-            "seed": self.seed,
-            **self.physics(),
-            "bounds": self.bounds,
-            "knot_verified": bool(self.replicas) and all(r.knot_verified
-                                                         for r in self.replicas),
-            "settings": self.settings,
-            "wall_time": self.wall_time,
-            "interrupted": self.interrupted,
-            "version": self.version,
-            "replicas": [r.summary() for r in self.replicas],
-        }
+        ok = bool(self.replicas) and all(r.knot_verified for r in self.replicas)
+        return {"problem": self.problem, "knot": self.knot, "beads": self.beads,
+                "seed": self.seed, **self.physics(), "bounds": self.bounds, "knot_verified": ok,
+                "settings": self.settings, "wall_time": self.wall_time,
+                "interrupted": self.interrupted, "version": self.version,
+                "replicas": [r.summary() for r in self.replicas]}
 
     def chain_meta(self, r: Replica) -> dict:
         """Metadata stored with a replica's chain file."""
@@ -197,6 +190,38 @@ class Problem:
 
     def jobs(self) -> list[Job]:
         raise NotImplementedError
+
+    # -- helpers of the subclasses' constructors and jobs -----------------------------------
+
+    def _setup(self, knot: str, replicas: int, seed: int, beads: int | None = None) -> None:
+        """The knot (catalogue entry and name), replicas, seed and beads, validated."""
+        from stiffknots.knots.catalogue import get_knot
+
+        self.knot = get_knot(knot)
+        self.knot_name = self.knot.name
+        self.replicas = V.replicas(replicas)
+        self.seed = V.seed(seed)
+        if beads is not None:
+            self.beads = V.beads(beads)
+
+    def _closed_starts(self, start) -> None:
+        """One starting embedding per replica (``self.starts``) and their chains."""
+        from stiffknots.knots.starts import resolve_starts, start_chain
+
+        self.starts = resolve_starts(self.knot, start, self.replicas, self.beads)
+        self.chains = {st: start_chain(self.knot, st, self.beads)
+                       for st in dict.fromkeys(self.starts)}
+
+    def _replica_jobs(self, settings: AnnealSettings, coords: Callable[[int], np.ndarray],
+                      start: Callable[[int], str], checkpoint_dir=None, resume: bool = False,
+                      checkpoint_seconds: float | None = None) -> list[Job]:
+        """One job per replica, its seed derived from the problem's seed."""
+        return [Job(replica=r, seed=s, coords=coords(r), settings=settings, knot=self.knot_name,
+                    start=start(r),
+                    checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
+                                if checkpoint_dir is not None else None),
+                    resume=resume, checkpoint_seconds=checkpoint_seconds)
+                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
 
     def bounds(self) -> dict:
         return {}

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
-from stiffknots.engine.driver import AnnealSettings, replica_seeds
+from stiffknots.engine.driver import AnnealSettings
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter
@@ -52,15 +52,9 @@ class ClosedAnneal(Problem):
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0,
                  start: str | Sequence[str] = "all"):
-        from stiffknots.knots.catalogue import get_knot
-        from stiffknots.knots.starts import resolve_starts, start_chain
         from stiffknots.theory.bounds import closed_bounds
 
-        self.knot = get_knot(knot)
-        self.knot_name = self.knot.name
-        self.beads = V.beads(beads)
-        self.replicas = V.replicas(replicas)
-        self.seed = V.seed(seed)
+        self._setup(knot, replicas, seed, beads)
         if resume and checkpoint_dir is None:
             raise InvalidParameter("checkpoint_dir", None, "given when resume=True",
                                    "the folder of the checkpoints")
@@ -74,21 +68,16 @@ class ClosedAnneal(Problem):
                                        target_epsilon=target_epsilon)
         self.settings.validate()
         self.settings.params.validate(self.beads)
-        self.starts = resolve_starts(self.knot, start, self.replicas, self.beads)
-        self.chains = {st: start_chain(self.knot, st, self.beads)
-                       for st in dict.fromkeys(self.starts)}
+        self._closed_starts(start)
         self.checkpoint_dir = checkpoint_dir
         self.resume = resume
         self.checkpoint_seconds = checkpoint_seconds
         self._bounds = closed_bounds(self.knot.bridge_number, self.knot.braid_index)
 
     def jobs(self) -> list[Job]:
-        return [Job(replica=r, seed=s, coords=self.chains[self.starts[r]],
-                    settings=self.settings, knot=self.knot_name, start=self.starts[r],
-                    checkpoint=(checkpoint_path(self.checkpoint_dir, r)
-                                if self.checkpoint_dir is not None else None),
-                    resume=self.resume, checkpoint_seconds=self.checkpoint_seconds)
-                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
+        return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
+                                  lambda r: self.starts[r], self.checkpoint_dir, self.resume,
+                                  self.checkpoint_seconds)
 
     def bounds(self) -> dict:
         b = self._bounds

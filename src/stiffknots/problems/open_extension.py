@@ -30,7 +30,7 @@ import numpy as np
 
 from stiffknots._version import __version__
 from stiffknots.analysis.open_shape import open_shape
-from stiffknots.engine.driver import AnnealSettings, replica_seeds
+from stiffknots.engine.driver import AnnealSettings
 from stiffknots.engine.params import Ensemble, MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import EmbeddingError, InvalidParameter
@@ -112,13 +112,9 @@ class OpenExtension(Problem):
     def __init__(self, knot: str, excess_length: int = 80, moves: int = DEFAULT_OPEN_MOVES,
                  replicas: int = 2, seed: int = 0, *, params: MoveParams | None = None,
                  schedule: Schedule | None = None, quench_fraction: float = 0.1):
-        from stiffknots.knots.catalogue import get_knot
         from stiffknots.theory.bounds import open_bounds
 
-        self.knot = get_knot(knot)
-        self.knot_name = self.knot.name
-        self.replicas = V.replicas(replicas)
-        self.seed = V.seed(seed)
+        self._setup(knot, replicas, seed)
         self.excess_length = V.integer("excess_length", excess_length, V.MIN_EXCESS_LENGTH,
                                        V.MAX_EXCESS_LENGTH)
         self.settings = AnnealSettings(moves=V.moves(moves), schedule=schedule or Schedule(),
@@ -132,9 +128,7 @@ class OpenExtension(Problem):
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)
 
     def jobs(self) -> list[Job]:
-        return [Job(replica=r, seed=s, coords=self.coords, settings=self.settings,
-                    knot=self.knot_name, start="open")
-                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
+        return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open")
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}
@@ -149,19 +143,11 @@ class OpenExtension(Problem):
         return {"excess_length": float(self.excess_length)}
 
 
-def anneal_open(
-    knot: str,
-    excess_length: int = 80,
-    moves: int = DEFAULT_OPEN_MOVES,
-    replicas: int = 2,
-    seed: int = 0,
-    *,
-    params: MoveParams | None = None,
-    schedule: Schedule | None = None,
-    workers: int | None = None,
-    quench_fraction: float = 0.1,
-    on_replica_done: Callable[[Replica], None] | None = None,
-) -> OpenResult:
+def anneal_open(knot: str, excess_length: int = 80, moves: int = DEFAULT_OPEN_MOVES,
+                replicas: int = 2, seed: int = 0, *, params: MoveParams | None = None,
+                schedule: Schedule | None = None, workers: int | None = None,
+                quench_fraction: float = 0.1,
+                on_replica_done: Callable[[Replica], None] | None = None) -> OpenResult:
     """Anneal an open knot at fixed excess length L_e (paper §VIII) and verify it.
 
     Parameters

@@ -25,13 +25,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from stiffknots.engine.driver import AnnealSettings, replica_seeds
+from stiffknots.engine.driver import AnnealSettings
 from stiffknots.engine.params import Ensemble, MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import EmbeddingError, InvalidParameter
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job, Problem, Replica, solve
-from stiffknots.problems.closed import checkpoint_path
 from stiffknots.problems.open_extension import (
     DEFAULT_OPEN_MOVES,
     OpenResult,
@@ -133,14 +132,10 @@ class OpenForce(Problem):
                  end_m_max: int = DEFAULT_END_M_MAX, quench_fraction: float = 0.1,
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0):
-        from stiffknots.knots.catalogue import get_knot
         from stiffknots.theory.bounds import open_bounds
 
-        self.knot = get_knot(knot)
-        self.knot_name = self.knot.name
+        self._setup(knot, replicas, seed)
         self.force = V.number("force", force, 0, lo_open=True)
-        self.replicas = V.replicas(replicas)
-        self.seed = V.seed(seed)
         V.number("end_fraction", end_fraction, 0, 1, lo_open=True)
         V.number("slide_fraction", slide_fraction, 0, 1, lo_open=True)
         V.integer("end_m_max", end_m_max, 1)
@@ -168,12 +163,8 @@ class OpenForce(Problem):
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)
 
     def jobs(self) -> list[Job]:
-        return [Job(replica=r, seed=s, coords=self.coords, settings=self.settings,
-                    knot=self.knot_name, start="open",
-                    checkpoint=(checkpoint_path(self.checkpoint_dir, r)
-                                if self.checkpoint_dir is not None else None),
-                    resume=self.resume, checkpoint_seconds=self.checkpoint_seconds)
-                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
+        return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open",
+                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds)
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}
@@ -191,27 +182,17 @@ class OpenForce(Problem):
                 "excess_length": replicas[0].excess_length if replicas else float("nan")}
 
 
-def anneal_open_force(
-    knot: str,
-    force: float,
-    n_beads: int | None = None,
-    moves: int = DEFAULT_OPEN_MOVES,
-    replicas: int = 2,
-    seed: int = 0,
-    *,
-    excess_length: int | None = None,
-    params: MoveParams | None = None,
-    schedule: Schedule | None = None,
-    end_fraction: float = DEFAULT_END_FRACTION,
-    slide_fraction: float = DEFAULT_SLIDE_FRACTION,
-    end_m_max: int = DEFAULT_END_M_MAX,
-    workers: int | None = None,
-    quench_fraction: float = 0.1,
-    on_replica_done: Callable[[Replica], None] | None = None,
-    checkpoint_dir: str | Path | None = None,
-    resume: bool = False,
-    checkpoint_seconds: float | None = 60.0,
-) -> ForceResult:
+def anneal_open_force(knot: str, force: float, n_beads: int | None = None,
+                      moves: int = DEFAULT_OPEN_MOVES, replicas: int = 2, seed: int = 0, *,
+                      excess_length: int | None = None, params: MoveParams | None = None,
+                      schedule: Schedule | None = None,
+                      end_fraction: float = DEFAULT_END_FRACTION,
+                      slide_fraction: float = DEFAULT_SLIDE_FRACTION,
+                      end_m_max: int = DEFAULT_END_M_MAX, workers: int | None = None,
+                      quench_fraction: float = 0.1,
+                      on_replica_done: Callable[[Replica], None] | None = None,
+                      checkpoint_dir: str | Path | None = None, resume: bool = False,
+                      checkpoint_seconds: float | None = 60.0) -> ForceResult:
     """Anneal an open knot at fixed end force F (energy E_d − F·Δz, paper §VIII); measure L_e.
 
     Parameters

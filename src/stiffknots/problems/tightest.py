@@ -39,7 +39,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from stiffknots.engine.driver import DEFAULT_POWERS, AnnealSettings, replica_seeds
+from stiffknots.engine.driver import DEFAULT_POWERS, AnnealSettings
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.problems import validate as V
@@ -93,15 +93,9 @@ class Tightest(Problem):
                  d: float | None = None, w: float | None = 0.25,
                  powers: tuple[int, ...] = DEFAULT_POWERS,
                  start: str | Sequence[str] = "all"):
-        from stiffknots.knots.catalogue import get_knot
-        from stiffknots.knots.starts import resolve_starts, start_chain
         from stiffknots.theory.bounds import restricted_curvature_bounds
 
-        self.knot = get_knot(knot)
-        self.knot_name = self.knot.name
-        self.beads = V.beads(beads)
-        self.replicas = V.replicas(replicas)
-        self.seed = V.seed(seed)
+        self._setup(knot, replicas, seed, beads)
         if not powers:
             V.integer("powers", None)
         powers = tuple(V.integer("powers", p, 1, 1024) for p in powers)
@@ -114,16 +108,13 @@ class Tightest(Problem):
                                        params=MoveParams(**kw), plan="tight", powers=powers)
         self.settings.validate()
         self.settings.params.validate(self.beads)
-        self.starts = resolve_starts(self.knot, start, self.replicas, self.beads)
-        self.chains = {st: start_chain(self.knot, st, self.beads)
-                       for st in dict.fromkeys(self.starts)}
+        self._closed_starts(start)
         self._bounds = restricted_curvature_bounds(self.knot.bridge_number,
                                                    self.knot.braid_index, R=1.0)
 
     def jobs(self) -> list[Job]:
-        return [Job(replica=r, seed=s, coords=self.chains[self.starts[r]],
-                    settings=self.settings, knot=self.knot_name, start=self.starts[r])
-                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
+        return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
+                                  lambda r: self.starts[r])
 
     def bounds(self) -> dict:
         b = self._bounds

@@ -31,7 +31,7 @@ def integer(name: str, value: Any, lo: int | None = None, hi: int | None = None)
     if not ok and isinstance(value, numbers.Real) and math.isfinite(value) and value == int(value):
         ok, value = True, int(value)
     if not ok or (lo is not None and value < lo) or (hi is not None and value > hi):
-        raise InvalidParameter(name, value, _range("an integer", lo, hi))
+        raise InvalidParameter(name, value, _describe("an integer", lo, hi))
     return int(value)
 
 
@@ -47,7 +47,8 @@ def number(name: str, value: Any, lo: float | None = None, hi: float | None = No
     if ok and hi is not None:
         ok = value < hi if hi_open else value <= hi
     if not ok:
-        raise InvalidParameter(name, value, _interval(lo, hi, lo_open, hi_open))
+        raise InvalidParameter(name, value, _describe("a finite number", lo, hi, lo_open, hi_open,
+                                                       "g"))
     return float(value)
 
 
@@ -73,21 +74,14 @@ def seed(value: Any, name: str = "seed") -> int:
     return integer(name, value, 0, MAX_SEED)
 
 
-def _range(what: str, lo: int | None, hi: int | None) -> str:
+def _describe(what: str, lo, hi, lo_open: bool = False, hi_open: bool = False,
+              spec: str = ",") -> str:
+    """'an integer in [8, 20,000]', 'a number > 0', ... in words."""
     if lo is not None and hi is not None:
-        return f"{what} in [{lo:,}, {hi:,}]"
+        return (f"{what} in {'(' if lo_open else '['}{lo:{spec}}, {hi:{spec}}"
+                f"{')' if hi_open else ']'}")
     if lo is not None:
-        return f"{what} ≥ {lo:,}"
+        return f"{what} {'>' if lo_open else '≥'} {lo:{spec}}"
     if hi is not None:
-        return f"{what} ≤ {hi:,}"
+        return f"{what} {'<' if hi_open else '≤'} {hi:{spec}}"
     return what
-
-
-def _interval(lo, hi, lo_open, hi_open) -> str:
-    if lo is not None and hi is not None:
-        return f"a number in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
-    if lo is not None:
-        return f"a number {'>' if lo_open else '≥'} {lo:g}"
-    if hi is not None:
-        return f"a number {'<' if hi_open else '≤'} {hi:g}"
-    return "a finite number"

@@ -325,12 +325,8 @@ class Document:
         return "\n\n".join(parts) + "\n"
 
     def to_html(self, base=None) -> str:
-        """The document as one self-contained HTML page (inline CSS; images by relative path).
-
-        Parameters
-        ----------
-        base : str or Path, optional
-            Folder the HTML file will be in: absolute image paths are made relative to it.
+        """The document as one self-contained HTML page (inline CSS; images by relative path,
+        made relative to the folder ``base`` the page will be in, as for :meth:`to_markdown`).
         """
         body = [f"<h1>{_inline_html(self.title)}</h1>"]
         for b in self.blocks:

@@ -84,6 +84,20 @@ def new_figure(figsize=(6.0, 4.5), layout: str | None = "constrained") -> Figure
     return fig
 
 
+def _finish(ax, xlabel: str, ylabel: str, labels, title):
+    """Axis labels, a light grid, the legend, optional point labels ``(xs, ys, names)`` and
+    title; returns ``ax``."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, color="0.92", lw=0.6)
+    ax.legend(loc="upper left", fontsize=8, frameon=False)
+    if labels is not None:
+        _label_points(ax, *labels)
+    if title:
+        ax.set_title(title)
+    return ax
+
+
 def _new_ax(ax, figsize=(6.0, 4.5)):
     if ax is None:
         ax = new_figure(figsize).subplots()
@@ -340,15 +354,8 @@ def plot_eps_vs_n2(points, ax=None, *, bounds: bool = True, labels: bool = True,
     top = max([*ys, EPS_0 * alpha2 * n_max**2 if bounds else 0.0])
     ax.set_ylim(0.0, top * 1.08)
     ax.set_xticks([k * k for k in range(0, n_max + 1)])
-    ax.set_xlabel(r"$n^2$ (bridge number squared)")
-    ax.set_ylabel(r"$\varepsilon^* = E L / C$")
-    ax.grid(True, color="0.92", lw=0.6)
-    ax.legend(loc="upper left", fontsize=8, frameon=False)
-    if labels:
-        _label_points(ax, xs, ys, names)
-    if title:
-        ax.set_title(title)
-    return ax
+    return _finish(ax, r"$n^2$ (bridge number squared)", r"$\varepsilon^* = E L / C$",
+                   (xs, ys, names) if labels else None, title)
 
 
 def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
@@ -367,18 +374,9 @@ def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
         (e:mu_ineq), i.e. ``2 pi^2 n1^2`` and ``2 pi^2 min(alpha^2 n1^2, i1^2)`` with
         ``n1 = n - 1``, ``i1 = i - 1``; one line when they coincide (the open trefoil:
         ``mu* = 2 pi^2 / L_e^2``).
-    labels : bool
-        Write the knot names next to the points.
-    title : str, optional
+    labels, title : as for :func:`plot_eps_vs_n2`.
 
-    Returns
-    -------
-    matplotlib Axes
-
-    Raises
-    ------
-    ValueError
-        If a point lacks a field or has ``L_e <= 0``.
+    Returns the matplotlib Axes; ValueError if a point lacks a field or has ``L_e <= 0``.
     """
     pts = _points(points, ("knot", "L_e", "mu", "n"))
     ax = _new_ax(ax)
@@ -420,15 +418,8 @@ def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
         y_top = max(y_top, y)
     ax.set_xlim(0.0, x_max)
     ax.set_ylim(0.0, 1.08 * y_top if y_top > 0 else 1.0)
-    ax.set_xlabel(r"$1 / L_e^2$")
-    ax.set_ylabel(r"tension $\mu$ ($C = 1$)")
-    ax.grid(True, color="0.92", lw=0.6)
-    ax.legend(loc="upper left", fontsize=8, frameon=False)
-    if labels:
-        _label_points(ax, xs, ys, names)
-    if title:
-        ax.set_title(title)
-    return ax
+    return _finish(ax, r"$1 / L_e^2$", r"tension $\mu$ ($C = 1$)",
+                   (xs, ys, names) if labels else None, title)
 
 
 def save_figure(fig_or_ax, path, *, dpi: int = 120, close: bool = True) -> Path:

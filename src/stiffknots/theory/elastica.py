@@ -351,13 +351,9 @@ def solve_eight(method: str = "integrals", dps: int = 30) -> tuple[Any, Any]:
         Paper: 1.53 and 55.93; verified 1.53320257821 and 56.2198048707.
     """
     _check_method(method)
-    if method == "integrals":
-        return _eight_by_integrals(dps, raw=False)
-    if method == "integrals-raw":
-        return _eight_by_integrals(dps, raw=True)
-    if method == "elliptic":
-        return _eight_by_elliptic(dps)
-    return _eight_by_shooting()
+    return {"integrals": lambda: _eight_by_integrals(dps, raw=False),
+            "integrals-raw": lambda: _eight_by_integrals(dps, raw=True),
+            "elliptic": lambda: _eight_by_elliptic(dps)}.get(method, _eight_by_shooting)()
 
 
 @dataclass(frozen=True)
