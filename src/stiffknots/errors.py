@@ -34,6 +34,7 @@ __all__ = [
     "UnknownKnotError",
     "UserInputError",
     "VerificationError",
+    "WorkerError",
 ]
 
 
@@ -114,6 +115,10 @@ class EnergyBookkeepingError(VerificationError):
 
 class ChainGeometryError(VerificationError):
     """A run ended with a broken chain (bond length, end clamping or exclusion violated)."""
+
+
+class WorkerError(StiffKnotsError, RuntimeError):
+    """A worker process died (a crash, the out-of-memory killer) before its job finished."""
 
 
 class RunStopped(StiffKnotsError):  # noqa: N818 (not an error: a requested stop)

@@ -83,9 +83,9 @@ def test_too_small_raises_with_minimal_n():
     nmin = minimal_beads(FIG8)
     assert 10 < nmin < 150
     embed_braid(FIG8, n_beads=nmin)  # works
-    with pytest.raises(EmbeddingError, match=rf"smallest n_beads that works is {nmin}\b"):
+    with pytest.raises(EmbeddingError, match=rf"least number of beads that works is {nmin}\b"):
         embed_braid(FIG8, n_beads=nmin - 1)
-    with pytest.raises(EmbeddingError, match="too small"):
+    with pytest.raises(EmbeddingError, match="too few"):
         embed_braid(FIG8, n_beads=8)
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import typer
 
 from stiffknots.cli import anneal, catalogue, open, studies, tightest
-from stiffknots.cli.app import app, err
+from stiffknots.cli.app import Interrupted, app, err
 from stiffknots.errors import InvalidParameter, UserInputError
 
 # the commands, in the order `stiffknots --help` lists them
@@ -42,6 +42,9 @@ def main() -> None:
         # ValueError: parameter validation of the engine; one line whatever the width
         err.print(f"error: {e}", highlight=False, markup=False, soft_wrap=True)
         raise SystemExit(2) from None
+    except Interrupted as e:
+        err.print(str(e), highlight=False, markup=False, soft_wrap=True)
+        raise SystemExit(130) from None
     except typer.Abort:
         err.print("interrupted", highlight=False, markup=False)
         raise SystemExit(130) from None

@@ -7,8 +7,30 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
+from rich.table import Table
 
-from stiffknots.cli.app import JsonOpt, UserError, dump, err, floats, fmt, out
+from stiffknots.cli.app import (
+    JsonOpt,
+    OutOpt,
+    OverwriteOpt,
+    ReplicaProgress,
+    ReplicasOpt,
+    SeedOpt,
+    UserError,
+    check_interrupted,
+    choice,
+    dump,
+    finish,
+    floats,
+    fmt,
+    out,
+    prepare_out,
+    width_of,
+    write_manifest,
+)
+
+UNITS = "bond length b = 1, C = 1: force and tension in C/b², eps_e = E·L_e/C"
 
 
 def open_knot(
@@ -27,12 +49,13 @@ def open_knot(
         help="Beads N of the chain (--ensemble force only; default: the embedding with "
              "⌈L_e/4⌉ beads added to each straight end).")] = None,
     moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
-    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
-    seed: Annotated[int, typer.Option(help="Seed.")] = 0,
+    replicas: ReplicasOpt = 2,
+    seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model).")] = None,
     m_max: Annotated[int, typer.Option(help="Largest sub-chain of a crankshaft move.")] = 60,
-    out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
+    out_dir: OutOpt = None,
+    overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
 ) -> None:
     """Anneal an open knot with its ends clamped on the z axis (paper §VIII); measure μ, ε_e.
@@ -43,229 +66,193 @@ def open_knot(
     excess_length, eps_e, shape of the last point (and force, with --ensemble force), and
     every point.
     """
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
     from stiffknots.engine.params import MoveParams
-    from stiffknots.problems.open_extension import anneal_open, excess_length_for_force
 
-    if ensemble not in ("extension", "force"):
-        raise UserError(f"--ensemble must be extension or force, got {ensemble!r}")
-    if ensemble == "force":
-        _open_force(name, excess_length, force, beads, moves, replicas, seed, exclusion, w,
-                    m_max, out_dir, json_)
-        return
-    if beads is not None:
-        raise UserError("--beads applies to --ensemble force only (at fixed extension the "
-                        "embedding sets N)")
-    les = floats(excess_length or "80", "--excess-length")
-    if any(v != int(v) or v < 8 for v in les):
-        raise UserError(f"--excess-length must be integers ≥ 8 (bond lengths), got {les}")
+    choice("--ensemble", ensemble, ("extension", "force"))
+    choice("--exclusion", exclusion, ("bead", "tube"))
+    params = MoveParams(exclusion=exclusion, m_max=m_max, **({} if w is None else {"w": w}))
     forces = floats(force, "--force") if force else []
-    if any(f <= 0 for f in forces):
-        raise UserError(f"--force must be > 0 (units C/b²), got {forces}")
-    if replicas < 1 or moves < 1000:
-        raise UserError("--replicas must be ≥ 1 and --moves ≥ 1000")
-    kw = {"exclusion": exclusion, "m_max": m_max}
-    if w is not None:
-        kw["w"] = w
-    params = MoveParams(**kw)
-    results = []
-    plan = [int(v) for v in les]
-    with Progress(TextColumn("[bold]open {task.fields[knot]} L_e = {task.fields[le]}"),
-                  BarColumn(), TextColumn("{task.completed}/{task.total} replicas"),
-                  TimeElapsedColumn(), console=err, transient=True, disable=json_) as prog:
-        task = prog.add_task("open", total=replicas, knot=name, le=plan[0])
-
-        def one(le):
-            prog.reset(task, total=replicas)
-            prog.update(task, le=le)
-            r = anneal_open(name, le, moves=moves, replicas=replicas, seed=seed, params=params,
-                            on_replica_done=lambda _r: prog.advance(task))
-            results.append(r)
-            return r
-
-        first = one(plan[0])
-        for le in plan[1:]:
-            one(le)
-        for f in forces:
-            le = max(8, int(round(excess_length_for_force(first.eps_e, f))))
-            r = one(le)
-            r.requested_force = f
-    points = []
-    for r in results:
-        d = r.to_dict()
-        p = {k: d[k] for k in ("excess_length", "energy", "eps_e", "tension", "shape",
-                               "beads", "knot_verified", "wall_time")}
-        p["requested_force"] = getattr(r, "requested_force", None)
-        p["min_segment_distance"] = r.best.min_segment_distance
-        p["shape_features"] = d["shape_features"]
-        points.append(p)
-    last = points[-1]
-    res0 = results[0]
+    les = floats(excess_length, "--excess-length") if excess_length else []
+    if ensemble == "force":
+        problems, follow = _force_problems(name, forces, les, beads, moves, replicas, seed,
+                                           params)
+    else:
+        problems, follow = _extension_problems(name, les or [80.0], forces, beads, moves,
+                                               replicas, seed, params)
+    out_dir = prepare_out(out_dir, overwrite)
+    results, stopped = _run(problems, follow, replicas, json_)
+    points = [_point(r) for r in results]
+    res0, last = results[0], points[-1]
     summary = {
-        "knot": res0.knot, "tension": last["tension"], "excess_length": last["excess_length"],
-        "eps_e": last["eps_e"], "shape": last["shape"], "bounds": res0.bounds,
-        "points": points, "seed": seed, "moves": moves, "replicas": replicas,
-        "params": params.as_dict(), "version": res0.version,
-        "units": "bond length b = 1, C = 1: tension in C/b², eps_e = E·L_e/C",
+        "knot": res0.knot, "ensemble": ensemble,
+        **{k: last[k] for k in ("tension", "excess_length", "eps_e", "shape")},
+        "bounds": res0.bounds, "points": points, "seed": seed, "moves": moves,
+        "replicas": replicas, "beads": res0.beads, "params": params.as_dict(),
+        "width": width_of(params, res0.beads), "version": res0.version, "units": UNITS,
     }
-    if len(points) >= 2:
+    if ensemble == "force":
+        summary |= {k: last[k] for k in ("force", "force_balance")}
+        summary["start_excess_length"] = res0.settings["start_excess_length"]
+    elif len(points) >= 2:
         x = [1 / p["excess_length"] ** 2 for p in points]
         y = [p["tension"] for p in points]
         summary["fit_eps_e"] = sum(a * b for a, b in zip(x, y, strict=True)) / sum(
             a * a for a in x)
     if out_dir is not None:
-        summary["files"] = _open_files(out_dir, results, points, summary)
+        summary["files"] = _write(out_dir, results, points, summary)
     if json_:
         dump(summary)
+        finish(stopped)
         return
-    from rich.table import Table
-
-    b = res0.bounds
-    t = Table(title=f"open {res0.knot}: ε_e bounds [{fmt(b['eps_e_lower'])}, "
-                    f"{fmt(b['eps_e_upper'])}] (§VIII)")
-    for col in ("L_e", "N", "F asked", "μ = E/L_e", "ε_e = μL_e²", "shape", "knot", "s"):
-        t.add_column(col, justify="right")
-    for p in points:
-        t.add_row(f"{p['excess_length']:.0f}", str(p["beads"]),
-                  "" if p["requested_force"] is None else f"{p['requested_force']:.3g}",
-                  f"{p['tension']:.5g}", f"{p['eps_e']:.3f}", p["shape"],
-                  "✓" if p["knot_verified"] else "✗", f"{p['wall_time']:.0f}")
-    out.print(t)
-    if "fit_eps_e" in summary:
-        out.print(f"fit μ L_e²/C = {summary['fit_eps_e']:.3f} (2π² = {2 * math.pi ** 2:.3f})")
+    _table(summary, res0)
     if out_dir is not None:
-        out.print(f"results in {out_dir}/")
+        out.print(f"results in {out_dir}/", markup=False, highlight=False)
+    finish(stopped)
 
 
-def _open_force(name, excess_length, force, beads, moves, replicas, seed, exclusion, w, m_max,
-                out_dir, json_) -> None:
-    """``stiffknots open --ensemble force``: one fixed-force anneal per --force value."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+def _extension_problems(name, les, forces, beads, moves, replicas, seed, params):
+    """Fixed extension: one problem per --excess-length, checked now; a --force adds a point
+    at the L_e it selects, known once ε_e is measured (``follow``)."""
+    from stiffknots.problems import validate as V
+    from stiffknots.problems.open_extension import OpenExtension
+    from stiffknots.theory.bounds import open_bounds
 
-    from stiffknots.engine.params import MoveParams
-    from stiffknots.problems.open_force import anneal_open_force
+    if beads is not None:
+        raise UserError("--beads applies to --ensemble force only (at fixed extension the "
+                        "embedding sets N)")
+    problems = [OpenExtension(name, le, moves, replicas, seed, params=params) for le in les]
+    k = problems[0].knot
+    eps_lo = open_bounds(k.bridge_number, k.braid_index).lower or 2 * math.pi**2
+    for f in forces:
+        V.number("force", f, 0, lo_open=True)
+        _selected_length(f, eps_lo)  # the thin-limit estimate must be in range already
+    return problems, forces
 
-    if not force:
+
+def _selected_length(force: float, eps_e: float) -> int:
+    """The excess length a force selects, (ε_e C/F)^½, checked against the limits."""
+    from stiffknots.errors import InvalidParameter
+    from stiffknots.problems import validate as V
+
+    le = math.sqrt(eps_e / force)
+    lo, hi = V.MIN_EXCESS_LENGTH, V.MAX_EXCESS_LENGTH
+    if not lo <= le <= hi:
+        raise InvalidParameter("force", force, f"in [{eps_e / hi**2:.3g}, {eps_e / lo**2:.3g}] "
+                               "C/b²", f"the excess length it selects, (ε_e C/F)^½ with "
+                               f"ε_e ≈ {eps_e:.4g}, must lie in [{lo}, {hi:,}] bonds")
+    return int(round(le))
+
+
+def _force_problems(name, forces, les, beads, moves, replicas, seed, params):
+    """Fixed force: one problem per --force, every one checked now."""
+    from stiffknots.problems.open_force import OpenForce
+
+    if not forces:
         raise UserError("--ensemble force needs --force F (in C/b²)")
-    forces = floats(force, "--force")
-    if any(not (f > 0 and math.isfinite(f)) for f in forces):
-        raise UserError(f"--force must be > 0 (units C/b²), got {forces}")
-    le0 = None
-    if excess_length is not None:
-        les = floats(excess_length, "--excess-length")
-        if len(les) != 1 or les[0] != int(les[0]) or les[0] < 8:
-            raise UserError("with --ensemble force, --excess-length is the starting L_e: one "
-                            f"integer ≥ 8, got {les}")
-        le0 = int(les[0])
-    if (beads is not None and beads < 8) or replicas < 1 or moves < 1000:
-        raise UserError("--beads must be ≥ 8, --replicas ≥ 1 and --moves ≥ 1000")
-    kw = {"exclusion": exclusion, "m_max": m_max}
-    if w is not None:
-        kw["w"] = w
-    params = MoveParams(**kw)
+    if len(les) > 1:
+        raise UserError("with --ensemble force, --excess-length is the starting L_e: one "
+                        f"value, got {les}")
+    le0 = les[0] if les else None
+    return [OpenForce(name, f, beads, moves, replicas, seed, excess_length=le0, params=params)
+            for f in forces], []
+
+
+def _run(problems, follow, replicas, quiet):
+    """Solve every problem in turn with live progress; then the extension points that the
+    forces in ``follow`` select (ε_e measured at the first point). Returns the results and
+    the result that Ctrl-C stopped (None if none)."""
+    from stiffknots.problems.base import solve
+    from stiffknots.problems.open_extension import OpenExtension
+
     results = []
-    with Progress(TextColumn("[bold]open {task.fields[knot]} F = {task.fields[f]}"),
-                  BarColumn(), TextColumn("{task.completed}/{task.total} replicas"),
-                  TimeElapsedColumn(), console=err, transient=True, disable=json_) as prog:
-        task = prog.add_task("open", total=replicas, knot=name, f=forces[0])
-        for f in forces:
-            prog.reset(task, total=replicas)
-            prog.update(task, f=f)
-            results.append(anneal_open_force(
-                name, f, n_beads=beads, moves=moves, replicas=replicas, seed=seed,
-                excess_length=le0, params=params,
-                on_replica_done=lambda _r: prog.advance(task)))
-    keys = ("force", "tension", "force_balance", "excess_length", "energy", "eps_e", "shape",
-            "beads", "knot_verified", "wall_time")
-    points = []
-    for r in results:
-        d = r.to_dict()
-        p = {k: d[k] for k in keys}
-        p["min_segment_distance"] = r.best.min_segment_distance
-        p["shape_features"] = d["shape_features"]
-        points.append(p)
-    last = points[-1]
-    res0 = results[0]
-    summary = {
-        "knot": res0.knot, "ensemble": "force", "force": last["force"],
-        "tension": last["tension"], "force_balance": last["force_balance"],
-        "excess_length": last["excess_length"], "eps_e": last["eps_e"], "shape": last["shape"],
-        "bounds": res0.bounds, "points": points, "seed": seed, "moves": moves,
-        "replicas": replicas, "beads": res0.beads, "start_excess_length":
-            res0.settings["start_excess_length"], "params": params.as_dict(),
-        "version": res0.version,
-        "units": "bond length b = 1, C = 1: force and tension in C/b², eps_e = E·L_e/C",
-    }
-    if out_dir is not None:
-        import json
 
-        from stiffknots._json import json_default
-        from stiffknots.knots.catalogue import get_knot
-        from stiffknots.report.figures import plot_tension, save_figure
-        from stiffknots.report.render import save_chain_png
+    def one(p, label):
+        with ReplicaProgress(label, replicas, disable=quiet) as bars:
+            r = solve(p, on_replica_done=bars.done, on_progress=bars)
+        if not results:
+            check_interrupted(r)
+        if r.replicas:
+            results.append(r)
+        return r
 
-        out_dir = Path(out_dir)
-        files = {}
-        for r in results:
-            sub = out_dir / f"F_{r.force:g}"
-            r.save(sub)
-            save_chain_png(r.best.coords, sub / "best.png", closed=False,
-                           title=f"open {r.knot}, F = {r.force:g}: L_e = "
-                                 f"{r.excess_length:.1f}, ε_e = {r.eps_e:.2f}")
-            files[f"F_{r.force:g}"] = str(sub)
-        kk = get_knot(res0.knot)
-        pts = [{"knot": r.knot, "L_e": r.excess_length, "mu": r.tension,
-                "n": kk.bridge_number, "i": kk.braid_index} for r in results]
-        files["tension_png"] = str(save_figure(plot_tension(pts), out_dir / "tension.png"))
-        (out_dir / "summary.json").write_text(json.dumps(summary, indent=2,
-                                                         default=json_default))
-        files["summary"] = str(out_dir / "summary.json")
-        summary["files"] = files
-    if json_:
-        dump(summary)
-        return
-    from rich.table import Table
-
-    b = res0.bounds
-    t = Table(title=f"open {res0.knot} at fixed force: ε_e bounds [{fmt(b['eps_e_lower'])}, "
-                    f"{fmt(b['eps_e_upper'])}] (§VIII)")
-    for col in ("F", "L_e", "μ = E/L_e", "μ/F", "ε_e = E·L_e", "shape", "knot", "s"):
-        t.add_column(col, justify="right")
-    for p in points:
-        t.add_row(f"{p['force']:.4g}", f"{p['excess_length']:.2f}", f"{p['tension']:.5g}",
-                  f"{p['force_balance']:.3f}", f"{p['eps_e']:.3f}", p["shape"],
-                  "✓" if p["knot_verified"] else "✗", f"{p['wall_time']:.0f}")
-    out.print(t)
-    if out_dir is not None:
-        out.print(f"results in {out_dir}/")
+    for p in problems:
+        label = (f"open {p.knot_name} F = {p.force:g}" if hasattr(p, "force")
+                 else f"open {p.knot_name} L_e = {p.excess_length}")
+        r = one(p, label)
+        if r.interrupted:
+            return results, r  # Ctrl-C: report what finished
+    p0 = problems[0]
+    for f in follow:
+        le = _selected_length(f, results[0].eps_e)
+        r = one(OpenExtension(p0.knot_name, le, p0.settings.moves, p0.replicas, p0.seed,
+                              params=p0.settings.params), f"open {p0.knot_name} F = {f:g}")
+        r.requested_force = f
+        if r.interrupted:
+            return results, r
+    return results, None
 
 
-def _open_files(out_dir: Path, results, points, summary) -> dict:
-    import json
+def _point(r) -> dict:
+    """One row of the output: the physics of one result, and its checks."""
+    d = r.to_dict()
+    keys = ("excess_length", "energy", "eps_e", "tension", "shape", "beads", "knot_verified",
+            "wall_time")
+    if "force" in d:
+        keys += ("force", "force_balance")
+    p = {k: d[k] for k in keys}
+    p["requested_force"] = getattr(r, "requested_force", None)
+    p["min_segment_distance"] = r.best.min_segment_distance
+    p["shape_features"] = d["shape_features"]
+    return p
 
+
+def _write(out_dir: Path, results, points, summary) -> dict:
+    """Every result in its own sub-folder (``Le_<L_e>`` or ``F_<F>``), μ against 1/L_e² with
+    the bounds, ``summary.json``, and the manifest last."""
+    from stiffknots.fileio import write_json
+    from stiffknots.knots.catalogue import get_knot
     from stiffknots.report.figures import plot_tension, save_figure
     from stiffknots.report.render import save_chain_png
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     files = {}
     for r in results:
-        sub = out_dir / f"Le_{int(r.excess_length)}"
-        r.save(sub)
-        png = sub / "best.png"
-        save_chain_png(r.best.coords, png, closed=False,
-                       title=f"open {r.knot}, L_e = {r.excess_length:.0f}: ε_e = {r.eps_e:.2f}")
-        files[f"Le_{int(r.excess_length)}"] = str(sub)
-    k = results[0]
-    from stiffknots.knots.catalogue import get_knot
-
-    kk = get_knot(k.knot)
-    pts = [{"knot": k.knot, "L_e": p["excess_length"], "mu": p["tension"], "n": kk.bridge_number,
-            "i": kk.braid_index} for p in points]
-    fig = save_figure(plot_tension(pts), out_dir / "tension.png")
-    files["tension_png"] = str(fig)
-    (out_dir / "summary.json").write_text(json.dumps(
-        {k2: v for k2, v in summary.items() if k2 != "files"}, indent=2, default=float))
-    files["summary"] = str(out_dir / "summary.json")
+        tag = f"F_{r.force:g}" if hasattr(r, "force") else f"Le_{r.excess_length:.0f}"
+        sub = out_dir / tag
+        saved = {k: str(v) for k, v in r.save(sub).items()}
+        saved["png"] = str(save_chain_png(
+            r.best.coords, sub / "best.png", closed=False,
+            title=f"open {r.knot}, {tag.replace('_', ' = ')}: L_e = {r.best.excess_length:.1f}, "
+                  f"ε_e = {r.eps_e:.2f}"))
+        files[tag] = saved
+    k = get_knot(results[0].knot)
+    pts = [{"knot": k.name, "L_e": p["excess_length"], "mu": p["tension"],
+            "n": k.bridge_number, "i": k.braid_index} for p in points]
+    files["tension_png"] = str(save_figure(plot_tension(pts), out_dir / "tension.png"))
+    files["summary"] = str(write_json(out_dir / "summary.json", summary))
+    write_manifest(out_dir, files, "open")
     return files
+
+
+def _table(summary, res0) -> None:
+    b = res0.bounds
+    force = summary["ensemble"] == "force"
+    t = Table(title=escape(f"open {res0.knot} ({summary['width']['text']}): ε_e bounds "
+                           f"[{fmt(b['eps_e_lower'])}, {fmt(b['eps_e_upper'])}] (§VIII, thin "
+                           "limit)"))
+    cols = (("F", "L_e", "μ = E/L_e", "μ/F") if force else ("L_e", "N", "F asked", "μ = E/L_e"))
+    for col in (*cols, "ε_e = E·L_e", "shape", "knot", "s"):
+        t.add_column(col, justify="right")
+    for p in summary["points"]:
+        if force:
+            head = (f"{p['force']:.4g}", f"{p['excess_length']:.2f}", f"{p['tension']:.5g}",
+                    f"{p['force_balance']:.3f}")
+        else:
+            asked = p["requested_force"]
+            head = (f"{p['excess_length']:.0f}", str(p["beads"]),
+                    "" if asked is None else f"{asked:.3g}", f"{p['tension']:.5g}")
+        t.add_row(*head, f"{p['eps_e']:.3f}", str(p["shape"]),
+                  "✓" if p["knot_verified"] else "✗", f"{p['wall_time']:.0f}")
+    out.print(t)
+    if "fit_eps_e" in summary:
+        out.print(f"fit μ L_e²/C = {summary['fit_eps_e']:.3f} (2π² = {2 * math.pi ** 2:.3f})",
+                  markup=False, highlight=False)

@@ -2,12 +2,28 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from stiffknots.cli.app import JsonOpt, UserError, dump, err, fmt, out
+from stiffknots.cli.anneal import save_results
+from stiffknots.cli.app import (
+    JsonOpt,
+    OutOpt,
+    OverwriteOpt,
+    ReplicaProgress,
+    ReplicasOpt,
+    SeedOpt,
+    StartOpt,
+    check_interrupted,
+    choice,
+    dump,
+    finish,
+    fmt,
+    out,
+    prepare_out,
+    width_of,
+)
 
 
 def tightest(
@@ -17,55 +33,55 @@ def tightest(
              "printed in that unit too (the search itself is scale-free: L†/R).")] = None,
     beads: Annotated[int, typer.Option(help="Resolution N (finer → thinner limit).")] = 150,
     moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
-    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
-    seed: Annotated[int, typer.Option(help="Seed.")] = 0,
-    exclusion: Annotated[str, typer.Option(help="bead (d = 1/√2) or tube.")] = "bead",
-    start: Annotated[str, typer.Option(
-        help="Starting embedding: all (every start that exists for the knot), braid or cage "
-             "(two-box rational knots [ab]: 4_1, 5_2, ...).")] = "all",
-    out_dir: Annotated[Path | None, typer.Option("--out", help="Write results here.")] = None,
+    replicas: ReplicasOpt = 2,
+    seed: SeedOpt = 0,
+    exclusion: Annotated[str, typer.Option(
+        help="tube (a thin tube regularising the thin knot, the default) or bead (the "
+             "paper's rule d = 1/√2: longer knots at a given N).")] = "tube",
+    w: Annotated[float, typer.Option(help="Tube diameter in bond lengths (tube model).")
+                 ] = 0.25,
+    start: StartOpt = "all",
+    out_dir: OutOpt = None,
+    overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
 ) -> None:
-    """Shortest knot whose curvature never exceeds 1/R (paper §IX.D): L†/R and its bounds."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    from stiffknots.problems.tightest import radius_of_turn
-    from stiffknots.problems.tightest import tightest as run
-
-    if max_curvature is not None and max_curvature <= 0:
-        raise UserError(f"--max-curvature must be > 0, got {max_curvature}")
-    if beads < 8 or replicas < 1:
-        raise UserError("--beads must be ≥ 8 and --replicas ≥ 1")
+    """Shortest knot whose curvature never exceeds 1/R (paper §IX D): L†/R and its bounds."""
     from stiffknots.knots.starts import STARTS
+    from stiffknots.problems import validate as V
+    from stiffknots.problems.base import solve
+    from stiffknots.problems.tightest import Tightest, radius_of_turn
 
-    if start != "all" and start not in STARTS:
-        raise UserError(f"--start must be all or one of {', '.join(STARTS)}, got {start!r}")
-    with Progress(TextColumn("[bold]tightest {task.fields[knot]}"), BarColumn(),
-                  TextColumn("{task.completed}/{task.total} replicas"), TimeElapsedColumn(),
-                  console=err, transient=True, disable=json_) as prog:
-        task = prog.add_task("tight", total=replicas, knot=name)
-        res = run(name, beads, moves=moves, replicas=replicas, seed=seed, exclusion=exclusion,
-                  on_replica_done=lambda _r: prog.advance(task), start=start)
+    if max_curvature is not None:
+        V.number("max_curvature", max_curvature, 0, lo_open=True)
+    choice("--start", start, ("all", *STARTS))
+    choice("--exclusion", exclusion, ("bead", "tube"))
+    problem = Tightest(name, beads, moves=moves, replicas=replicas, seed=seed,
+                       exclusion=exclusion, w=w, start=start)
+    out_dir = prepare_out(out_dir, overwrite)
+    with ReplicaProgress(f"tightest {problem.knot_name}", replicas, disable=json_,
+                         unit="power energy") as bars:
+        res = solve(problem, on_replica_done=bars.done, on_progress=bars)
+    check_interrupted(res)
+    width = width_of(problem.settings.params, beads)
     d = res.to_dict()
     d["max_curvature"] = max_curvature
+    d["width"] = width
     if max_curvature is not None:
         d["length"] = d["length_over_R"] / max_curvature
     if out_dir is not None:
-        from stiffknots.report.render import save_chain_png
-
-        paths = res.save(out_dir)
-        png = Path(out_dir) / "best.png"
-        save_chain_png(res.best.coords, png,
-                       title=f"{res.knot}: L†/R = {res.length_over_R:.3f} (N = {beads})")
-        d["files"] = {k: str(v) for k, v in paths.items()} | {"png": str(png)}
+        d["files"] = save_results(res, out_dir, f"{res.knot}: L†/R = {res.length_over_R:.3f} "
+                                  f"({width['text']})", "tightest")
     if json_:
         dump(d)
+        finish(res, replicas)
         return
     b = res.bounds
-    out.print(f"{res.knot}: L†/R = {d['length_over_R']:.4f}  (bounds [{fmt(b['lower'])}, "
-              f"{fmt(b['upper'])}], {b['attained_by']}); θ* = {d['theta_max']:.5f} rad, "
-              f"R = {radius_of_turn(d['theta_max']):.3f} bonds; replicas "
-              + ", ".join(f"{r.length_over_R:.4f}" for r in res.replicas)
-              + f"; {res.wall_time:.0f} s")
+    out.print(f"{res.knot}: L†/R = {d['length_over_R']:.4f} at {width['text']} (bounds "
+              f"[{fmt(b['lower'])}, {fmt(b['upper'])}], {b['attained_by']}); "
+              f"θ* = {d['theta_max']:.5f} rad, R = {radius_of_turn(d['theta_max']):.3f} bonds; "
+              "replicas " + ", ".join(f"{r.length_over_R:.4f}" for r in res.replicas)
+              + f"; {res.wall_time:.0f} s", markup=False, highlight=False)
     if max_curvature is not None:
-        out.print(f"with 1/R = {max_curvature:g}: L† = {d['length']:.4g}")
+        out.print(f"with 1/R = {max_curvature:g}: L† = {d['length']:.4g}", markup=False,
+                  highlight=False)
+    finish(res, replicas)

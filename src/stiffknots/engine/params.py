@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from stiffknots.engine import prims as K
+from stiffknots.errors import InvalidParameter
 
 EXCLUSION_MODELS = ("bead", "tube")
 ENERGY_MODELS = ("bending", "power")
@@ -63,33 +64,33 @@ class MoveParams:
     max_turn: float | None = None
 
     def validate(self, n_beads: int) -> None:
+        """InvalidParameter (naming the parameter) unless every value is allowed for a chain
+        of ``n_beads`` beads."""
         if self.exclusion not in EXCLUSION_MODELS:
-            raise ValueError(
-                f"unknown exclusion model {self.exclusion!r}; "
-                f"allowed: {', '.join(EXCLUSION_MODELS)}"
-            )
-        if not 0 < self.delta < 0.5:
-            raise ValueError(f"delta must be in (0, 0.5) rad, got {self.delta}")
-        if not 0 <= self.p_single <= 1:
-            raise ValueError(f"p_single must be in [0, 1], got {self.p_single}")
-        if self.m_max < 1:
-            raise ValueError(f"m_max must be ≥ 1, got {self.m_max}")
-        if not 0 < self.l_min <= self.l_cap:
-            raise ValueError(f"need 0 < l_min ≤ l_cap, got {self.l_min}, {self.l_cap}")
-        if not 0 < self.d < 1 or not 0 < self.w < 1:
-            raise ValueError("exclusion distances d and w must lie in (0, 1) bond lengths")
+            raise InvalidParameter("exclusion", self.exclusion,
+                                   "one of " + ", ".join(EXCLUSION_MODELS))
         if self.energy not in ENERGY_MODELS:
-            raise ValueError(
-                f"unknown energy {self.energy!r}; allowed: {', '.join(ENERGY_MODELS)}"
-            )
-        if int(self.power) != self.power or self.power < 1:
-            raise ValueError(f"power must be an integer ≥ 1, got {self.power}")
-        if not self.energy_scale > 0:
-            raise ValueError(f"energy_scale must be > 0, got {self.energy_scale}")
-        if self.max_turn is not None and not 0 < self.max_turn < np.pi:
-            raise ValueError(f"max_turn must be in (0, π) radians or None, got {self.max_turn}")
+            raise InvalidParameter("energy", self.energy, "one of " + ", ".join(ENERGY_MODELS))
+        for name, lo, hi in (("delta", 0, 0.5), ("p_single", 0, 1), ("phi_max", 0, math.pi),
+                             ("l_cap", 0, 10), ("l_min", 0, 10), ("d", 0, 1), ("w", 0, 1),
+                             ("energy_scale", 0, math.inf)):
+            v = getattr(self, name)
+            ok = isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi
+            if not ok or (v == lo and name != "p_single") or (v == hi and name in ("d", "w")):
+                raise InvalidParameter(name, v, f"a finite number in ({lo:g}, {hi:g})"
+                                       if name != "p_single" else "in [0, 1]")
+        if not self.l_min <= self.l_cap:
+            raise InvalidParameter("l_min", self.l_min, f"≤ l_cap = {self.l_cap:g}")
         if n_beads < 8:
-            raise ValueError(f"a chain needs at least 8 beads, got {n_beads}")
+            raise InvalidParameter("beads", n_beads, "an integer ≥ 8")
+        if int(self.m_max) != self.m_max or not 1 <= self.m_max <= 20_000:
+            raise InvalidParameter("m_max", self.m_max, "an integer in [1, 20,000] (the kernel "
+                                   "caps it at N − 3, N − 4 for an open chain)")
+        if int(self.power) != self.power or not 1 <= self.power <= 1024:
+            raise InvalidParameter("power", self.power, "an integer in [1, 1024]")
+        if self.max_turn is not None and not (math.isfinite(self.max_turn)
+                                              and 0 < self.max_turn < math.pi):
+            raise InvalidParameter("max_turn", self.max_turn, "in (0, π) radians, or None")
 
     def as_dict(self) -> dict:
         return asdict(self)

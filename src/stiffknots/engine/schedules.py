@@ -33,9 +33,12 @@ benchmark knots (bench/RESULTS.md) and is not the default.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
+
+from stiffknots.errors import InvalidParameter
 
 SCHEDULES = ("power", "geometric", "tempering")
 
@@ -76,21 +79,21 @@ class Schedule:
 
     def validate(self) -> None:
         if self.kind not in SCHEDULES:
-            raise ValueError(f"unknown schedule {self.kind!r}; allowed: {', '.join(SCHEDULES)}")
-        if not (self.t_start > 0 and self.t_end > 0 and self.t_end < self.t_start):
-            raise ValueError(
-                f"temperatures must satisfy 0 < t_end < t_start, got {self.t_start}, {self.t_end}"
-            )
-        if self.exponent <= 0:
-            raise ValueError(f"the power-law exponent must be > 0, got {self.exponent}")
+            raise InvalidParameter("schedule", self.kind, "one of " + ", ".join(SCHEDULES))
+        for name in ("t_start", "t_end", "exponent", "t_relax", "t_relax_end"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise InvalidParameter(name, v, "a finite number > 0")
+        if not self.t_end < self.t_start:
+            raise InvalidParameter("t_end", self.t_end, f"below t_start = {self.t_start:g}")
         if not 0 <= self.relax_fraction < 1:
-            raise ValueError(f"relax_fraction must be in [0, 1), got {self.relax_fraction}")
+            raise InvalidParameter("relax_fraction", self.relax_fraction, "in [0, 1)")
         if self.relax_fraction > 0 and self.kind != "tempering" and not (
-                self.t_relax > self.t_relax_end > 0):
-            raise ValueError(
-                f"need t_relax > t_relax_end > 0, got {self.t_relax}, {self.t_relax_end}")
-        if self.kind == "tempering" and self.n_temps < 2:
-            raise ValueError(f"tempering needs n_temps ≥ 2, got {self.n_temps}")
+                self.t_relax > self.t_relax_end):
+            raise InvalidParameter("t_relax_end", self.t_relax_end,
+                                   f"below t_relax = {self.t_relax:g}")
+        if self.kind == "tempering" and not 2 <= self.n_temps <= 64:
+            raise InvalidParameter("n_temps", self.n_temps, "an integer in [2, 64]")
 
     @property
     def stages(self) -> tuple[str, ...]:

@@ -536,8 +536,9 @@ def embed_braid(
         if nmin <= n_beads:  # pragma: no cover - non-monotone corner case
             nmin = minimal_beads(word, n, d_min, gap=gap, start=n_beads + 1)
         raise EmbeddingError(
-            f"n_beads={n_beads} is too small to embed braid {word} on {n} strands with "
-            f"non-adjacent beads >= {d_min:.4g} apart; the smallest n_beads that works is {nmin}"
+            f"{n_beads} beads are too few to embed braid {word} on {n} strands with "
+            f"non-adjacent beads ≥ {d_min:.4g} apart; the least number of beads that works is "
+            f"{nmin}"
         )
     if seed is not None:
         rng = np.random.default_rng(seed)

@@ -64,6 +64,7 @@ from stiffknots.errors import IdentificationError
 __all__ = [
     "IdentificationError",
     "identify",
+    "identify_code",
     "verify_knot",
     "normalize_name",
     "close_open_chain_along_z",
@@ -354,8 +355,14 @@ def identify(coords, closed: bool = True, *, max_crossings: int | None = None) -
     IdentificationError
         If the polynomial cannot be computed (far too many crossings after simplification).
     """
+    return identify_code(homfly_code(coords, closed=closed), max_crossings=max_crossings)
+
+
+def identify_code(code: str, *, max_crossings: int | None = None) -> str:
+    """The knot names of a HOMFLY-PT polynomial (topoly's code, :func:`homfly_code`), as
+    :func:`identify` returns them: mirror-insensitive KnotInfo names joined by '|', or
+    'unknown' when the polynomial is not in topoly's table."""
     _, _, _, polvalues = _topoly()
-    code = homfly_code(coords, closed=closed)
     raw = polvalues["HOMFLYPT"].get(code, "Unknown")
     if raw == "Unknown":
         return "unknown"

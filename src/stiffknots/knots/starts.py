@@ -91,7 +91,10 @@ def resolve_starts(knot, start, replicas: int, n_beads: int = 150) -> list[str]:
     """
     if isinstance(start, str):
         if start == "all":
-            return split_replicas(available_starts(knot, n_beads), replicas)
+            found = available_starts(knot, n_beads)
+            if not found:  # none fits: the braid closure's error says how many beads it needs
+                start_chain(knot, "braid", n_beads)
+            return split_replicas(found, replicas)
         if start not in STARTS:
             raise ValueError(f"unknown start {start!r}; choose all or one of {', '.join(STARTS)}")
         return [start] * replicas

@@ -14,9 +14,15 @@ Verification, in one place, of every replica:
 * the engine's own checks (:func:`~stiffknots.engine.driver.make_result`): the energy
   recomputed from scratch equals the incremental one, bonds are unit (1e-10), open chains stay
   clamped, the exclusion rule holds;
-* the knot type (:func:`~stiffknots.knots.identify.verify_knot`; an open chain is closed along
-  its z axis first): a changed type raises :class:`~stiffknots.errors.TopologyChangedError` —
-  a bug, never a data point.
+* the knot type. Every starting chain is checked before any work: its HOMFLY-PT polynomial
+  (:func:`~stiffknots.knots.identify.homfly_code`, chiral; an open chain is closed along its z
+  axis first) must be the requested knot's in topoly's table, or — for a knot beyond the table
+  (13 crossings) — at least computable, the start being that knot by construction (KnotInfo's
+  braid word). Every final chain must then have exactly the polynomial of its start: the moves
+  cannot change the knot type (nor its chirality), so any difference raises
+  :class:`~stiffknots.errors.TopologyChangedError` — a bug, never a data point. The replica's
+  ``knot`` is then the one catalogue name that was requested, and ``knot_check`` says how it
+  was confirmed.
 """
 
 from __future__ import annotations
@@ -52,8 +58,10 @@ class Replica(ReplicaResult):
 
     Attributes
     ----------
-    knot : the knot type found by the invariant check.
-    knot_verified : True when it is the requested type.
+    knot : the requested knot's catalogue name when verified; otherwise the type the invariant
+        identifies.
+    knot_verified : True when the final chain has the HOMFLY-PT polynomial of its start.
+    knot_check : how the type was confirmed (module docstring).
     start : the starting embedding (``braid``, ``cage``, ``eighty``, ``open``).
     observables : problem-specific numbers (e.g. ``length_over_R`` of §IX D), also
         readable as attributes (``r.length_over_R``).
@@ -63,6 +71,7 @@ class Replica(ReplicaResult):
     knot_verified: bool | None = None
     start: str | None = None
     observables: dict = field(default_factory=dict)
+    knot_check: str | None = None
 
     def __getattr__(self, name: str):
         # the problem's observables read as attributes (``r.length_over_R``)
@@ -82,22 +91,63 @@ class Job:
     settings: AnnealSettings
     knot: str
     start: str = "braid"
+    start_code: str = ""  # HOMFLY-PT polynomial of the starting chain (topoly's code)
     checkpoint: Path | None = None
     resume: bool = False
     checkpoint_seconds: float | None = None
 
 
-def run_job(job: Job) -> Replica:
-    """Worker: run the engine on one job and verify the result's knot type."""
-    from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
+def knot_code(coords: np.ndarray, closed: bool = True) -> str:
+    """The HOMFLY-PT polynomial (topoly's chiral code) of a chain; an open chain is closed
+    along its z axis first (§VIII)."""
+    from stiffknots.knots.identify import homfly_code
 
-    runner = run_tempering if job.settings.schedule.kind == "tempering" else run_replica
-    raw = runner(job.coords, job.settings, job.seed, job.replica, checkpoint=job.checkpoint,
-                 resume=job.resume, checkpoint_every=10 if job.checkpoint else None,
-                 checkpoint_seconds=job.checkpoint_seconds if job.checkpoint else None)
-    coords = raw.coords if job.settings.closed else close_open_chain_along_z(raw.coords)
-    ok, found = verify_knot(coords, job.knot, closed=True)
-    return Replica(**vars(raw), knot=found, knot_verified=bool(ok), start=job.start)
+    return homfly_code(coords, closed=closed)
+
+
+def start_code(knot_name: str, coords: np.ndarray, closed: bool, start: str) -> str:
+    """The polynomial of a starting chain, after checking that it is the requested knot.
+
+    Raises
+    ------
+    EmbeddingError
+        If the invariant cannot be computed, or if the table names another knot.
+    """
+    from stiffknots.errors import EmbeddingError, IdentificationError
+    from stiffknots.knots.identify import identify_code, normalize_name
+
+    try:
+        code = knot_code(coords, closed)
+    except IdentificationError as exc:
+        raise EmbeddingError(f"the {start} embedding of {knot_name} cannot be checked: {exc}; "
+                             "its knot type could not be verified, so it is not run") from None
+    names = identify_code(code)
+    if names != "unknown" and normalize_name(knot_name) not in names.split("|"):
+        raise EmbeddingError(f"the {start} embedding of {knot_name} identifies as {names}: "
+                             "this is a bug in stiffknots, please report it")
+    return code
+
+
+def run_job(job: Job) -> Replica:
+    """Worker: run the engine on one job and verify the result's knot type (its polynomial
+    must be its start's)."""
+    from stiffknots.knots.identify import identify_code
+    from stiffknots.problems.pool import report
+
+    kw = {"checkpoint": job.checkpoint, "resume": job.resume,
+          "checkpoint_every": 10 if job.checkpoint else None,
+          "checkpoint_seconds": job.checkpoint_seconds if job.checkpoint else None}
+    if job.settings.schedule.kind == "tempering":
+        raw = run_tempering(job.coords, job.settings, job.seed, job.replica, **kw)
+    else:
+        raw = run_replica(job.coords, job.settings, job.seed, job.replica, progress=report, **kw)
+    code = knot_code(raw.coords, job.settings.closed)
+    ok = code == job.start_code
+    found = job.knot if ok else identify_code(code)
+    check = "HOMFLY-PT polynomial unchanged from the starting chain" if ok else (
+        "HOMFLY-PT polynomial differs from the starting chain's")
+    return Replica(**vars(raw), knot=found, knot_verified=ok, start=job.start,
+                   knot_check=check)
 
 
 @dataclass
@@ -205,19 +255,23 @@ class Problem:
             self.beads = V.beads(beads)
 
     def _closed_starts(self, start) -> None:
-        """One starting embedding per replica (``self.starts``) and their chains."""
+        """One starting embedding per replica (``self.starts``), their chains and their
+        checked knot polynomials."""
         from stiffknots.knots.starts import resolve_starts, start_chain
 
         self.starts = resolve_starts(self.knot, start, self.replicas, self.beads)
         self.chains = {st: start_chain(self.knot, st, self.beads)
                        for st in dict.fromkeys(self.starts)}
+        self.codes = {st: start_code(self.knot_name, x, True, st)
+                      for st, x in self.chains.items()}
 
     def _replica_jobs(self, settings: AnnealSettings, coords: Callable[[int], np.ndarray],
-                      start: Callable[[int], str], checkpoint_dir=None, resume: bool = False,
+                      start: Callable[[int], str], code: Callable[[int], str],
+                      checkpoint_dir=None, resume: bool = False,
                       checkpoint_seconds: float | None = None) -> list[Job]:
         """One job per replica, its seed derived from the problem's seed."""
         return [Job(replica=r, seed=s, coords=coords(r), settings=settings, knot=self.knot_name,
-                    start=start(r),
+                    start=start(r), start_code=code(r),
                     checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
                                 if checkpoint_dir is not None else None),
                     resume=resume, checkpoint_seconds=checkpoint_seconds)
@@ -240,11 +294,14 @@ class Problem:
 
 
 def solve(problem: Problem, *, workers: int | None = None,
-          on_replica_done: Callable[[Replica], None] | None = None) -> ReplicaSet:
+          on_replica_done: Callable[[Replica], None] | None = None,
+          on_progress: Callable[[dict], None] | None = None) -> ReplicaSet:
     """Run every job of ``problem`` on ``workers`` processes (default: all cores) and return
     its verified replicas, best first.
 
-    Ctrl-C keeps the finished replicas (``interrupted`` is then True).
+    Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
+    receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
+    "best"}`` (moves done and planned, current and lowest ε) from the workers.
 
     Raises
     ------
@@ -260,7 +317,7 @@ def solve(problem: Problem, *, workers: int | None = None,
         if on_replica_done is not None:
             on_replica_done(r)
 
-    results, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done)
+    results, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress)
     results.sort(key=problem.sort_key)
     bad = [r for r in results if not r.knot_verified]
     if bad:

@@ -76,8 +76,8 @@ class ClosedAnneal(Problem):
 
     def jobs(self) -> list[Job]:
         return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
-                                  lambda r: self.starts[r], self.checkpoint_dir, self.resume,
-                                  self.checkpoint_seconds)
+                                  lambda r: self.starts[r], lambda r: self.codes[self.starts[r]],
+                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds)
 
     def bounds(self) -> dict:
         b = self._bounds

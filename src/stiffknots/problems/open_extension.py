@@ -35,7 +35,7 @@ from stiffknots.engine.params import Ensemble, MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import EmbeddingError, InvalidParameter
 from stiffknots.problems import validate as V
-from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve
+from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve, start_code
 
 DEFAULT_OPEN_MOVES = 30_000_000
 TWO_PI2 = 2.0 * np.pi**2
@@ -100,7 +100,9 @@ def open_chain(knot: str, excess_length: int, seed: int = 0) -> np.ndarray:
     try:
         return embed_open(k.braid_word, k.braid_strands, le, expected=k.name, seed=seed)
     except EmbeddingError as exc:
-        msg = str(exc).replace("n_beads", "excess_length")
+        # the closed chain cut open has L_e beads (one arm bond on each side, §VIII)
+        msg = (str(exc).replace(" beads are too few", " bonds of excess length are too few")
+               .replace("least number of beads", "least excess length"))
         raise EmbeddingError(f"{k.name}: {msg}") from None
 
 
@@ -125,10 +127,12 @@ class OpenExtension(Problem):
         self.coords = open_chain(self.knot_name, self.excess_length, seed=self.seed)
         self.beads = len(self.coords)
         self.settings.params.validate(self.beads)
+        self.code = start_code(self.knot_name, self.coords, False, "open")
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)
 
     def jobs(self) -> list[Job]:
-        return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open")
+        return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open",
+                                  lambda r: self.code)
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}

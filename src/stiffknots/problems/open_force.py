@@ -30,7 +30,7 @@ from stiffknots.engine.params import Ensemble, MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import EmbeddingError, InvalidParameter
 from stiffknots.problems import validate as V
-from stiffknots.problems.base import Job, Problem, Replica, solve
+from stiffknots.problems.base import Job, Problem, Replica, solve, start_code
 from stiffknots.problems.open_extension import (
     DEFAULT_OPEN_MOVES,
     OpenResult,
@@ -149,6 +149,7 @@ class OpenForce(Problem):
         self.coords, self.start_excess_length = start_chain(
             self.knot_name, self.force, n_beads, excess_length, seed=self.seed)
         self.beads = len(self.coords)
+        self.code = start_code(self.knot_name, self.coords, False, "open")
         self.moves_kw = {"end_fraction": end_fraction, "slide_fraction": slide_fraction,
                          "end_m_max": end_m_max}
         self.settings = AnnealSettings(
@@ -164,7 +165,8 @@ class OpenForce(Problem):
 
     def jobs(self) -> list[Job]:
         return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open",
-                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds)
+                                  lambda r: self.code, self.checkpoint_dir, self.resume,
+                                  self.checkpoint_seconds)
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}

@@ -1,28 +1,96 @@
-"""Independent replicas on all cores (spawned worker processes), Ctrl-C safe.
+"""Independent replicas on all cores (spawned worker processes): Ctrl-C safe, no orphans, live
+progress.
 
-A job is a picklable top-level function; each call returns one result. When the user presses
-Ctrl-C the finished results are kept and the rest cancelled.
+A job is a picklable top-level function; each call returns one result. Guarantees:
+
+* **Ctrl-C** reaches the parent only (the workers ignore SIGINT): the finished results are kept,
+  the running workers are terminated at once (no traceback from a worker, no CPU left
+  burning), and the caller learns that the run was interrupted.
+* **The parent killed** (``kill -9``): every worker asks the kernel to kill it when its parent
+  dies (Linux ``PR_SET_PDEATHSIG``) and, where that is not available, a watchdog thread exits
+  the worker within a second of the parent's death.
+* **Progress**: a job may call :func:`report` with a small dict (e.g. moves done, best ε); the
+  parent's ``on_progress`` receives it while the jobs run.
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import multiprocessing as mp
+import os
+import queue
+import signal
+import threading
+import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any
+
+from stiffknots.errors import WorkerError
+
+_PROGRESS: Callable[[dict], None] | None = None  # set in workers (and in-process runs)
+
+
+def report(info: dict) -> None:
+    """Send a progress record of the running job to the parent (no-op if nobody listens)."""
+    if _PROGRESS is not None:
+        with contextlib.suppress(Exception):
+            _PROGRESS(info)
+
+
+def _die_with_parent(parent: int) -> None:
+    """Make this process exit when the parent ``parent`` dies."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:  # died before prctl took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _worker_init(parent: int, progress_queue) -> None:
+    global _PROGRESS
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+    _die_with_parent(parent)
+    if progress_queue is not None:
+        _PROGRESS = progress_queue.put
+
+
+def _drain(q, on_progress: Callable[[dict], None]) -> None:
+    while True:
+        try:
+            item = q.get_nowait()
+        except (queue.Empty, OSError, EOFError, ValueError):
+            return
+        on_progress(item)
 
 
 def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
-             on_done: Callable[[Any], None] | None = None) -> tuple[list[Any], bool]:
+             on_done: Callable[[Any], None] | None = None,
+             on_progress: Callable[[dict], None] | None = None) -> tuple[list[Any], bool]:
     """Run ``job(*args)`` for every ``args`` in ``arg_list`` on ``workers`` processes.
 
     Returns
     -------
     (results in completion order, interrupted) — ``interrupted`` is True after Ctrl-C.
+    An exception raised by a job is raised here (the other workers are terminated); a worker
+    that dies (a crash, the out-of-memory killer) raises :class:`WorkerError`.
     """
+    global _PROGRESS
     results: list[Any] = []
-    interrupted = False
     if workers <= 1 or len(arg_list) <= 1:
+        _PROGRESS = on_progress
         try:
             for args in arg_list:
                 res = job(*args)
@@ -30,20 +98,48 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
                 if on_done:
                     on_done(res)
         except KeyboardInterrupt:
-            interrupted = True
-        return results, interrupted
-    ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"))
-    futs = [ex.submit(job, *args) for args in arg_list]
+            return results, True
+        finally:
+            _PROGRESS = None
+        return results, False
+    ctx = mp.get_context("spawn")
+    q = ctx.Queue() if on_progress is not None else None
+    ex = ProcessPoolExecutor(max_workers=min(workers, len(arg_list)), mp_context=ctx,
+                             initializer=_worker_init, initargs=(os.getpid(), q))
+    interrupted = False
     try:
-        for f in as_completed(futs):
-            res = f.result()
-            results.append(res)
-            if on_done:
-                on_done(res)
-        ex.shutdown(wait=True)
+        pending = {ex.submit(job, *args) for args in arg_list}
+        while pending:
+            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            if q is not None:
+                _drain(q, on_progress)
+            for f in done:
+                try:
+                    res = f.result()  # re-raises a job's exception here
+                except BrokenProcessPool:
+                    raise WorkerError("a worker process died (a crash or the out-of-memory "
+                                      "killer) before its replica finished") from None
+                results.append(res)
+                if on_done:
+                    on_done(res)
     except KeyboardInterrupt:
         interrupted = True
-        for f in futs:
-            f.cancel()
-        ex.shutdown(wait=False, cancel_futures=True)
+    finally:
+        _terminate(ex)
+        if q is not None:
+            _drain(q, on_progress)
+            q.close()
+            q.join_thread()
     return results, interrupted
+
+
+def _terminate(ex: ProcessPoolExecutor) -> None:
+    """Stop the pool now: cancel what has not started, kill the running workers."""
+    procs = list(getattr(ex, "_processes", {}).values())
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.join(5)

@@ -114,7 +114,7 @@ class Tightest(Problem):
 
     def jobs(self) -> list[Job]:
         return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
-                                  lambda r: self.starts[r])
+                                  lambda r: self.starts[r], lambda r: self.codes[self.starts[r]])
 
     def bounds(self) -> dict:
         b = self._bounds
