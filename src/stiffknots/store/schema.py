@@ -1,0 +1,153 @@
+"""Schema of the results database (SQLite), version 1.
+
+One file (default ``results/stiffknots.db``; ``--db PATH``), journal mode WAL (readers never
+block the writer, a killed writer never leaves a half-written row), one row per annealed
+replica. Plain SQLite: any SQLite ≥ 3.24 reads it (``sqlite3 results/stiffknots.db``); no
+``STRICT`` tables, so old SQLite builds can open it — the column types are enforced by ``CHECK``
+constraints and by :meth:`Store.put <stiffknots.store.sqlite.Store.put>` instead.
+
+Versioning
+----------
+The ``meta`` table holds ``schema_version`` (this module's :data:`SCHEMA_VERSION`), the UTC time
+the database was created and the stiffknots version that created it; ``PRAGMA application_id``
+is :data:`APPLICATION_ID` (``"SKNT"``). Opening a database of another schema version raises
+:class:`~stiffknots.store.errors.SchemaVersionError` naming both versions; a change of the
+schema bumps :data:`SCHEMA_VERSION` and adds a migration.
+
+Table ``replicas``
+------------------
+One row per replica. Key: ``UNIQUE(knot, exclusion, beads, thickness_key, seed, replica,
+settings_hash)`` — writing a replica whose key is stored is a no-op (the first write wins).
+
+=====================  ========  ==========================================================
+column                 type      meaning
+=====================  ========  ==========================================================
+id                     INTEGER   row id (primary key, assigned by SQLite)
+knot                   TEXT      knot name as the catalogue writes it (``5_2``)  [key]
+exclusion              TEXT      exclusion model, ``bead`` or ``tube``  [key]
+beads                  INTEGER   number of beads N (≥ 3)  [key]
+thickness              REAL      exclusion width: bead distance d (bead) or tube diameter w
+                                 (tube), bond length 1; exact value as run
+thickness_key          TEXT      the thickness rounded to 12 significant digits, as text
+                                 (``0.707106781187``): the key's form of it  [key]
+w_over_L               REAL      thickness / contour length (L = N closed, N − 1 open)
+seed                   INTEGER   the run's (user) seed, 0 ≤ seed < 2⁶³  [key]
+replica                INTEGER   replica index within the run (≥ 0)  [key]
+replica_seed           INTEGER   the seed the engine derived for this replica (NULL: unknown)
+settings_hash          TEXT      16 hex digits, SHA-256 of the canonical settings JSON  [key]
+settings               TEXT      the canonical settings JSON itself (what was hashed)
+problem                TEXT      the problem solved (``anneal``, ...); also in the settings
+version                TEXT      stiffknots version that computed the replica
+epsilon                REAL      final normalised energy ε = E·L/C (ε = E_d·N/C for the chain)
+shape                  TEXT      shape class ``CB``, ``4C``, ``80`` or ``other``; NULL: not
+                                 classified (then states classify the stored chain)
+multiplicity           INTEGER   circular-braid index i for ``CB`` (≥ 1), NULL otherwise
+min_segment_distance   REAL      smallest distance between non-adjacent segments of the chain
+converged              INTEGER   1 / 0: the run's convergence test passed / failed; NULL: none
+start                  TEXT      starting embedding of this replica (``braid``, ``cage``,
+                                 ``80``, ...); NULL: unknown
+wall_seconds           REAL      wall-clock seconds of the replica's run
+cpu_seconds            REAL      CPU seconds of the replica's run (NULL: not measured)
+knot_verified          INTEGER   1: the final chain's knot type was checked and equals
+                                 ``knot``; 0: checked and differs; NULL: not checked
+created                TEXT      UTC time the row was written (ISO 8601)
+extra                  TEXT      JSON object of everything else the run reported (energies,
+                                 acceptance, bond error, stage energies, tempering, ...)
+coords                 BLOB      the final chain: N × 3 float64, little-endian, row-major
+                                 (x0 y0 z0 x1 ...), exactly 24·N bytes (CHECK)
+coords_sha256          TEXT      SHA-256 (64 hex digits) of ``coords``
+=====================  ========  ==========================================================
+
+Indexes: the unique key (also serves look-ups by knot, by knot and model, ...),
+``replicas_ensemble`` on ``(knot, exclusion, beads, thickness_key, settings_hash, epsilon)``
+(states of one ensemble, in ε order) and ``replicas_settings`` on ``settings_hash`` (a sweep
+listing the keys of one settings).
+
+View ``ensembles``: one row per ensemble — replicas of one knot with the same exclusion model,
+bead count, thickness and settings, the set whose states are grouped together (see
+:meth:`Store.states <stiffknots.store.sqlite.Store.states>`) — with its replica count and its
+lowest and mean ε.
+
+Table ``meta``: ``key``/``value`` text pairs (``schema_version``, ``created``,
+``created_by``).
+"""
+
+from __future__ import annotations
+
+__all__ = ["SCHEMA_VERSION", "APPLICATION_ID", "DDL", "COLUMNS", "ROW_COLUMNS",
+           "ENSEMBLE_FIELDS"]
+
+#: Version of the schema this code writes and reads.
+SCHEMA_VERSION = 1
+
+#: ``PRAGMA application_id`` of a stiffknots results database (the bytes ``"SKNT"``).
+APPLICATION_ID = int.from_bytes(b"SKNT", "big")
+
+#: Fields that define an ensemble: replicas grouped into states together.
+ENSEMBLE_FIELDS = ("knot", "exclusion", "beads", "thickness_key", "settings_hash")
+
+_REPLICAS = """
+CREATE TABLE IF NOT EXISTS replicas (
+    id                   INTEGER PRIMARY KEY,
+    knot                 TEXT    NOT NULL CHECK (typeof(knot) = 'text' AND length(knot) > 0),
+    exclusion            TEXT    NOT NULL CHECK (exclusion IN ('bead', 'tube')),
+    beads                INTEGER NOT NULL CHECK (typeof(beads) = 'integer' AND beads >= 3),
+    thickness            REAL    NOT NULL CHECK (typeof(thickness) = 'real' AND thickness > 0),
+    thickness_key        TEXT    NOT NULL CHECK (typeof(thickness_key) = 'text'),
+    w_over_L             REAL    NOT NULL CHECK (typeof(w_over_L) = 'real' AND w_over_L > 0),
+    seed                 INTEGER NOT NULL CHECK (typeof(seed) = 'integer' AND seed >= 0),
+    replica              INTEGER NOT NULL CHECK (typeof(replica) = 'integer' AND replica >= 0),
+    replica_seed         INTEGER CHECK (replica_seed IS NULL OR typeof(replica_seed) = 'integer'),
+    settings_hash        TEXT    NOT NULL CHECK (length(settings_hash) = 16),
+    settings             TEXT    NOT NULL,
+    problem              TEXT    NOT NULL CHECK (length(problem) > 0),
+    version              TEXT    NOT NULL,
+    epsilon              REAL    NOT NULL CHECK (typeof(epsilon) = 'real'),
+    shape                TEXT    CHECK (shape IS NULL OR shape IN ('CB', '4C', '80', 'other')),
+    multiplicity         INTEGER CHECK (CASE WHEN shape IS 'CB'
+                                             THEN typeof(multiplicity) = 'integer'
+                                                  AND multiplicity >= 1
+                                             ELSE multiplicity IS NULL END),
+    min_segment_distance REAL    NOT NULL CHECK (typeof(min_segment_distance) = 'real'),
+    converged            INTEGER CHECK (converged IS NULL OR converged IN (0, 1)),
+    start                TEXT,
+    wall_seconds         REAL    NOT NULL CHECK (typeof(wall_seconds) = 'real'
+                                                 AND wall_seconds >= 0),
+    cpu_seconds          REAL    CHECK (cpu_seconds IS NULL OR (typeof(cpu_seconds) = 'real'
+                                                                AND cpu_seconds >= 0)),
+    knot_verified        INTEGER CHECK (knot_verified IS NULL OR knot_verified IN (0, 1)),
+    created              TEXT    NOT NULL,
+    extra                TEXT    NOT NULL DEFAULT '{}',
+    coords               BLOB    NOT NULL CHECK (typeof(coords) = 'blob'
+                                                 AND length(coords) = 24 * beads),
+    coords_sha256        TEXT    NOT NULL CHECK (length(coords_sha256) = 64),
+    UNIQUE (knot, exclusion, beads, thickness_key, seed, replica, settings_hash)
+)"""
+
+_ENSEMBLES = """
+CREATE VIEW IF NOT EXISTS ensembles AS
+SELECT knot, exclusion, beads, thickness_key, min(thickness) AS thickness,
+       min(w_over_L) AS w_over_L, settings_hash, min(problem) AS problem,
+       count(*) AS replicas, min(epsilon) AS eps_min, avg(epsilon) AS eps_mean
+FROM replicas
+GROUP BY knot, exclusion, beads, thickness_key, settings_hash"""
+
+#: The statements that create an empty database (run in one transaction, idempotent).
+DDL: tuple[str, ...] = (
+    "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
+    _REPLICAS,
+    "CREATE INDEX IF NOT EXISTS replicas_ensemble ON replicas "
+    "(knot, exclusion, beads, thickness_key, settings_hash, epsilon)",
+    "CREATE INDEX IF NOT EXISTS replicas_settings ON replicas (settings_hash)",
+    _ENSEMBLES,
+)
+
+#: Every column of ``replicas``, in table order.
+COLUMNS = ("id", "knot", "exclusion", "beads", "thickness", "thickness_key", "w_over_L", "seed",
+           "replica", "replica_seed", "settings_hash", "settings", "problem", "version",
+           "epsilon", "shape", "multiplicity", "min_segment_distance", "converged", "start",
+           "wall_seconds", "cpu_seconds", "knot_verified", "created", "extra", "coords",
+           "coords_sha256")
+
+#: The columns a query returns for a row (all but the chain itself).
+ROW_COLUMNS = tuple(c for c in COLUMNS if c != "coords")
