@@ -23,6 +23,7 @@ from stiffknots.chain import Chain, regular_polygon
 
 BEAD_WIDTH = "bead rule d = 1/√2, N = 150"
 TUBE_WIDTH = {"w/L": 0.01, "N": 150}
+TUBE_RADIUS = 0.75  # w / 2 for w/L = 0.01 and L = N = 150
 
 #: Flags for Debian's chromium, headless, with nothing reaching the network; WebGL through
 #: ANGLE on SwiftShader (software), so that plotly's 3D views render without a GPU.
@@ -35,7 +36,7 @@ CHROMIUM_CANDIDATES = ("/usr/bin/chromium", "/usr/bin/chromium-browser")
 
 
 def _state(coords, shape, *, multiplicity=None, count=None, converged=True, width=None,
-           eps_mean_shift=0.0):
+           eps_mean_shift=0.0, radius=None):
     c = Chain(np.asarray(coords, dtype=float), True)
     eps = c.epsilon()
     d = {"shape": shape, "multiplicity": multiplicity, "epsilon": eps,
@@ -44,6 +45,8 @@ def _state(coords, shape, *, multiplicity=None, count=None, converged=True, widt
          "coords": c.coords}
     if width is not None:
         d["width"] = width
+    if radius is not None:
+        d["radius"] = radius
     return d
 
 
@@ -72,8 +75,9 @@ def synthetic_knots(n_beads: int = 150) -> list[dict]:
              "bead": {"width": BEAD_WIDTH, "replicas": 4,
                       "ground": _state(cb2, "CB", multiplicity=2, count=4), "metastable": []},
              "tube": {"replicas": 2,
-                      "ground": _state(regular_polygon(n, 2).coords, "CB", multiplicity=2,
-                                       count=2, width=TUBE_WIDTH),
+                      "ground": _state(regular_polygon(n, 2, amplitude=0.8).coords, "CB",
+                                       multiplicity=2, count=2, width=TUBE_WIDTH,
+                                       radius=TUBE_RADIUS),
                       "metastable": []}}},
         {"name": "4_1", "crossing_number": 4, "n": 2, "i": 3, "families": ["4C"],
          "models": {
@@ -81,8 +85,8 @@ def synthetic_knots(n_beads: int = 150) -> list[dict]:
                       "ground": _state(cage, "4C", count=5, eps_mean_shift=0.4),
                       "metastable": [_state(eighty, "80", count=3, eps_mean_shift=1.1)]},
              "tube": {"replicas": 4,
-                      "ground": _state(synthetic.four_cage(n, offset=1.2), "4C", count=4,
-                                       width=TUBE_WIDTH),
+                      "ground": _state(synthetic.four_cage(n, offset=1.6), "4C", count=4,
+                                       width=TUBE_WIDTH, radius=TUBE_RADIUS),
                       "metastable": []}}},
         {"name": "5_1", "crossing_number": 5, "n": 2, "i": 2, "families": ["CB"],
          "models": {
@@ -91,8 +95,9 @@ def synthetic_knots(n_beads: int = 150) -> list[dict]:
                                        multiplicity=2, count=4),
                       "metastable": []},
              "tube": {"replicas": 2,
-                      "ground": _state(synthetic.torus_braid(2, n, separation=1.3), "CB",
-                                       multiplicity=2, count=2, width=TUBE_WIDTH),
+                      "ground": _state(synthetic.torus_braid(2, n, separation=1.6), "CB",
+                                       multiplicity=2, count=2, width=TUBE_WIDTH,
+                                       radius=TUBE_RADIUS),
                       "metastable": []}}},
         {"name": "5_2", "crossing_number": 5, "n": 2, "i": 3, "families": ["4C"],
          "models": {

@@ -15,9 +15,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from atlas_support import BEAD_WIDTH, synthetic_families, synthetic_knots
+from atlas_support import BEAD_WIDTH, TUBE_RADIUS, synthetic_families, synthetic_knots
 
 from stiffknots.report.atlas import family_statistics, format_width, state_mesh, write_atlas
+from stiffknots.report.render import DEFAULT_RADIUS
 from stiffknots.theory import closed_bounds
 
 
@@ -276,6 +277,21 @@ def test_state_mesh_is_a_proper_rotation_of_the_chain(knots):
     assert np.abs(a @ rot - centres).max() < 5e-3
     assert m["t"][0] == 0.0 and 0.99 < m["t"][-1] < 1.0
     assert max(m["aspect"].values()) == pytest.approx(1.8)
+    # the tube radius: every vertex at least that far from its bead, the nearest exactly
+    for radius, mesh in [(DEFAULT_RADIUS, m), (0.75, state_mesh(x, radius=0.75, n_sides=8))]:
+        v = np.asarray(mesh["v"]).reshape(mesh["rings"], mesh["sides"], 3)
+        d = np.linalg.norm(v - v.mean(axis=1, keepdims=True), axis=2)
+        assert d.min() == pytest.approx(radius, abs=2e-3)
+
+
+def test_the_drawing_radius_reaches_the_3d_view(atlas):
+    text = (atlas.parent / "knots" / "4_1.html").read_text(encoding="utf-8")
+    states = _script_json(text, "states-data")
+    assert [s["label"].split(" — ")[0] for s in states] == ["bead", "bead", "tube"]
+    for s, radius in zip(states, [DEFAULT_RADIUS, DEFAULT_RADIUS, TUBE_RADIUS], strict=True):
+        v = np.asarray(s["v"]).reshape(s["rings"], s["sides"], 3)
+        d = np.linalg.norm(v - v.mean(axis=1, keepdims=True), axis=2)
+        assert d.min() == pytest.approx(radius, abs=2e-3)
 
 
 def test_input_errors_say_what_is_wrong(tmp_path, knots):
@@ -318,3 +334,21 @@ def test_import_sets_no_matplotlib_backend():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=Path(__file__).parent)
     assert out.stdout.strip() == "svg"
+
+
+def test_knots_without_results_still_get_a_row_and_a_page(tmp_path):
+    idx = write_atlas(tmp_path, [{"name": "0_1"}, {"name": "K11n34", "crossing_number": 11,
+                                                   "n": 3, "i": 4}])
+    text = idx.read_text(encoding="utf-8")
+    p = _Rows()
+    p.feed(text)
+    assert [r["attrs"]["data-name"] for r in p.rows] == ["0_1", "K11n34"]
+    cells = dict(zip(COLS, p.rows[0]["cells"], strict=True))
+    assert cells["bounds"]["text"] == "—" and cells["n"]["text"] == "—"
+    b = closed_bounds(3, 4)
+    assert dict(zip(COLS, p.rows[1]["cells"], strict=True))["bounds"]["text"].startswith(
+        f"{b.lower:.2f} – {b.upper:.2f}")
+    assert 'id="model"' not in text and 'id="families"' not in text
+    page = (tmp_path / "knots" / "K11n34.html").read_text(encoding="utf-8")
+    assert "No computed states" in page and "states-data" not in page
+    assert not (tmp_path / "thumbs").exists()

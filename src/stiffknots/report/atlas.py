@@ -55,6 +55,8 @@ where a ``STATE`` is a dict::
       "min_segment_distance": 0.48,      # optional: closest approach of two segments
       "coords": array of shape (N, 3),   # optional: the chain (for the 3D view, thumbnail)
       "closed": True,                    # optional (default True)
+      "radius": 0.354,                   # optional: tube radius of the pictures (bond units;
+                                         #   default half the bead distance 1/√2)
       "width": "bead rule d = 1/√2, N = 150",   # str or a dict such as {"w/L": 0.01}
     }
 
@@ -144,6 +146,7 @@ class _State:
     coords: np.ndarray | None
     closed: bool
     width: str | None
+    radius: float | None
 
     @property
     def shape_label(self) -> str | None:
@@ -269,6 +272,9 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> _State:
     if conv is not None and not isinstance(conv, bool | np.bool_):
         raise ValueError(f"{where}: converged must be True, False or None, got {conv!r}")
     shape = d.get("shape")
+    radius = _opt_float(d.get("radius"), f"{where}: radius")
+    if radius is not None and radius <= 0:
+        raise ValueError(f"{where}: the drawing radius must be > 0, got {radius}")
     return _State(
         role=role,
         shape=None if shape is None else str(shape),
@@ -282,6 +288,7 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> _State:
         coords=_coords(d.get("coords"), where),
         closed=bool(d.get("closed", True)),
         width=width,
+        radius=radius,
     )
 
 
@@ -410,7 +417,7 @@ def _count_text(st: _State, replicas: int | None) -> str:
 # ----------------------------------------------------------------------------------------------
 
 
-def _thumbnail_png(coords: np.ndarray, closed: bool) -> bytes:
+def _thumbnail_png(coords: np.ndarray, closed: bool, radius: float | None) -> bytes:
     """A small PNG of a chain drawn as a tube (matplotlib object API, Agg canvas)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -421,20 +428,20 @@ def _thumbnail_png(coords: np.ndarray, closed: bool) -> bytes:
     fig = Figure(figsize=(size, size))
     FigureCanvasAgg(fig)
     ax = fig.add_axes((0.0, 0.0, 1.0, 1.0), projection="3d")
-    plot_tube(coords, ax, closed=closed, n_sides=12)
+    plot_tube(coords, ax, closed=closed, radius=radius, n_sides=12)
     buf = BytesIO()
     fig.savefig(buf, format="png", dpi=100, facecolor="white")
     return buf.getvalue()
 
 
-def state_mesh(coords, *, closed: bool = True, n_sides: int = _MESH_SIDES,
-               digits: int = 3) -> dict:
+def state_mesh(coords, *, closed: bool = True, radius: float | None = None,
+               n_sides: int = _MESH_SIDES, digits: int = 3) -> dict:
     """The tube of a chain as compact data for the 3D view of the knot pages.
 
     The chain is centred and turned (by a proper rotation, never a mirror) to its principal
     axes, as :func:`stiffknots.report.render.best_view` does for the still pictures, and the
-    tube is :func:`stiffknots.report.render.tube_mesh` with its default radius (half the bead
-    exclusion distance). The page's script joins the rings into triangles.
+    tube is :func:`stiffknots.report.render.tube_mesh`. The page's script joins the rings into
+    triangles.
 
     Parameters
     ----------
@@ -442,6 +449,10 @@ def state_mesh(coords, *, closed: bool = True, n_sides: int = _MESH_SIDES,
         Bead coordinates, ``N >= 3``.
     closed : bool
         Join the last bead to the first.
+    radius : float, optional
+        Tube radius in bond units; default
+        :data:`stiffknots.report.render.DEFAULT_RADIUS` (half the bead exclusion distance
+        1/√2 of the paper's chain).
     n_sides : int
         Vertices per ring.
     digits : int
@@ -456,13 +467,14 @@ def state_mesh(coords, *, closed: bool = True, n_sides: int = _MESH_SIDES,
         (the extent of the tube along x, y, z) and ``aspect`` (the extents in proportion,
         equal scales on the three axes; their size sets the zoom of the orthographic view).
     """
-    from stiffknots.report.render import best_view, tube_mesh
+    from stiffknots.report.render import DEFAULT_RADIUS, best_view, tube_mesh
 
     x = np.asarray(coords, dtype=float)
     x = x - x.mean(axis=0)
     rot, (elev, azim) = best_view(x)
     x = x @ rot
-    mesh = tube_mesh(x, closed=closed, n_sides=n_sides)
+    mesh = tube_mesh(x, DEFAULT_RADIUS if radius is None else float(radius), closed=closed,
+                     n_sides=n_sides)
     seg = np.linalg.norm(np.diff(np.vstack([x, x[:1]]) if closed else x, axis=0), axis=1)
     arc = np.concatenate([[0.0], np.cumsum(seg)])[: len(x)]
     total = float(arc[-1] + (seg[-1] if closed else 0.0)) or 1.0
@@ -703,7 +715,9 @@ nav.top { font-size: 0.92em; margin-bottom: 0.4em; color: var(--muted); }
 tr.state-row { cursor: pointer; }
 tr.state-row.active td { background: #e8f0fb; }
 .viewer { display: grid; grid-template-columns: minmax(0, 1fr); gap: 0.4em; }
-#view3d { width: 100%; height: 560px; border: 1px solid var(--line); border-radius: 6px; }
+.view-frame { border: 1px solid var(--line); border-radius: 6px; overflow: hidden; }
+#view3d { width: 100%; height: 560px; }
+.view-link { color: var(--accent); text-decoration: underline; }
 .view-controls { display: flex; gap: 1em; align-items: center; flex-wrap: wrap; }
 .view-controls select { font: inherit; padding: 0.2em 0.4em; }
 #view-caption { color: var(--muted); font-size: 0.92em; }
@@ -1168,12 +1182,13 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
                 idx = str(len(states_js))
                 cap = (f"{k.name}, {mname}, {st.role}: {st.shape_label or 'unclassified'}, "
                        f"ε = {_num(st.epsilon)} at {st.width or 'unknown width'}")
-                states_js.append({**state_mesh(st.coords, closed=st.closed),
+                states_js.append({**state_mesh(st.coords, closed=st.closed,
+                                               radius=st.radius),
                                   "caption": cap,
                                   "label": f"{mname} — {st.role}: "
                                            f"{st.shape_label or 'unclassified'} "
                                            f"(ε = {_num(st.epsilon)})"})
-                view = "view"
+                view = '<span class="view-link">view</span>'
             parts.append(
                 f'<tr class="state-row" data-state="{idx}" data-model="{_e(mname)}">'
                 f"<td>{_e(st.role)}</td>"
@@ -1193,8 +1208,10 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
             + "".join(f'<option value="{j}">{_e(s["label"])}</option>'
                       for j, s in enumerate(states_js))
             + '</select></label><span id="view-caption"></span></div>\n'
-            '<div id="view3d"></div>\n<p class="figure-note">Drag to turn, scroll to zoom. The '
-            "tube has the radius of half the bead exclusion distance; its colour runs along the "
+            '<div class="view-frame"><div id="view3d"></div></div>\n'
+            '<p class="figure-note">Drag to turn, scroll to zoom. The tube is drawn with the '
+            "radius given with the state, by default half the bead exclusion distance 1/√2 (so "
+            "that beads in contact show touching tubes); its colour runs along the "
             "arclength. Click a row of the tables to show that state.</p>\n</div>\n")
         parts.append('<script type="application/json" id="states-data">'
                      + _json_script(states_js) + "</script>\n"
@@ -1280,7 +1297,8 @@ def write_atlas(out_dir, knots: list[dict], *, families: dict | None = None,
                     continue
                 tdir.mkdir(exist_ok=True)
                 fname = f"{k.slug}-{m.slug}.png"
-                (tdir / fname).write_bytes(_thumbnail_png(m.ground.coords, m.ground.closed))
+                (tdir / fname).write_bytes(_thumbnail_png(m.ground.coords, m.ground.closed,
+                                                           m.ground.radius))
                 thumbs[(k.name, m.name)] = f"thumbs/{fname}"
 
     fig = _eps_figure(ks, models, default_model)
