@@ -1,0 +1,59 @@
+"""Write a demo atlas of synthetic knots and screenshot it with headless chromium.
+
+Usage::
+
+    .venv/bin/python scripts/atlas_demo.py [OUT_DIR]     # default /tmp/atlas-demo
+
+Writes ``OUT_DIR/index.html`` (with ``knots/``, ``thumbs/``, ``plotly.min.js``) and the
+screenshots ``OUT_DIR/screenshot-index.png`` (the top of the index page),
+``OUT_DIR/screenshot-index-full.png`` (all of it) and
+``OUT_DIR/screenshot-knot.png`` (the page of 4_1 with its 3D view). The chains are synthetic
+(``tests/report/atlas_support.py``), not annealed results.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "tests" / "report"))
+
+from atlas_support import (  # noqa: E402
+    chromium_context,
+    find_chromium,
+    synthetic_families,
+    synthetic_knots,
+)
+
+from stiffknots.report.atlas import write_atlas  # noqa: E402
+
+
+def main(argv: list[str]) -> int:
+    out = Path(argv[1] if len(argv) > 1 else "/tmp/atlas-demo")
+    index = write_atlas(out, synthetic_knots(), families=synthetic_families(),
+                        title="Atlas of stiff knots (demo: synthetic chains)",
+                        meta={"data": "synthetic chains of known shape, not annealed results"})
+    print(f"wrote {index}")
+    exe = find_chromium()
+    if exe is None:
+        print("no chromium (apt-get install -y chromium): no screenshots", file=sys.stderr)
+        return 1
+    with chromium_context(exe, width=1360, height=900) as ctx:
+        page = ctx.new_page()
+        page.goto(index.as_uri())
+        page.wait_for_selector("#eps-plot .main-svg")
+        page.screenshot(path=str(out / "screenshot-index.png"))
+        page.screenshot(path=str(out / "screenshot-index-full.png"), full_page=True)
+        page.goto((out / "knots" / "4_1.html").as_uri())
+        page.wait_for_selector("#view3d .gl-container canvas")
+        time.sleep(0.5)
+        page.screenshot(path=str(out / "screenshot-knot.png"), full_page=True)
+    for name in ("screenshot-index.png", "screenshot-index-full.png", "screenshot-knot.png"):
+        print(f"wrote {out / name}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv))

@@ -1,0 +1,192 @@
+"""The atlas pages in a real headless browser: Debian's chromium driven by Playwright.
+
+Chromium is installed with apt-get when it is missing (we are root on the project's machines);
+the tests skip, saying why, only if that fails. Playwright's own browser download is never
+used: the browser is ``/usr/bin/chromium`` with the flags of ``atlas_support.CHROMIUM_ARGS``
+(WebGL on SwiftShader, so that plotly's 3D views render without a GPU).
+
+Every page is opened from disk (``file://``), and any request that is not for a local file
+fails the test: the pages must work with no network.
+"""
+
+import io
+import re
+
+import numpy as np
+import pytest
+from atlas_support import chromium_context, find_chromium, synthetic_families, synthetic_knots
+
+from stiffknots.report.atlas import write_atlas
+
+pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install "
+                    "-e '.[dev]')")
+
+_LOCAL = ("file:", "data:", "blob:", "about:")
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    exe = find_chromium(install=True)
+    if exe is None:
+        pytest.skip("Debian's chromium is missing and `apt-get install -y chromium` failed")
+    return exe
+
+
+@pytest.fixture(scope="module")
+def atlas(tmp_path_factory):
+    out = tmp_path_factory.mktemp("atlas-browser")
+    return write_atlas(out, synthetic_knots(), families=synthetic_families(),
+                       title="Browser test atlas")
+
+
+class Watched:
+    """A page whose console errors, page errors and non-local requests are recorded."""
+
+    def __init__(self, page):
+        self.page, self.errors, self.remote = page, [], []
+        page.on("console", lambda m: self.errors.append(f"console: {m.text}")
+                if m.type == "error" else None)
+        page.on("pageerror", lambda e: self.errors.append(f"pageerror: {e}"))
+        page.on("request", lambda r: None if r.url.startswith(_LOCAL)
+                else self.remote.append(r.url))
+
+    def check(self):
+        assert self.errors == [], self.errors
+        assert self.remote == [], f"requests to the network: {self.remote}"
+
+
+@pytest.fixture(scope="module")
+def context(chromium):
+    with chromium_context(chromium) as ctx:
+        yield ctx
+
+
+@pytest.fixture
+def page(context):
+    p = context.new_page()
+    w = Watched(p)
+    yield w
+    p.close()
+
+
+def _column(page, header: str) -> int:
+    heads = page.locator("#knots thead th").all_inner_texts()
+    return next(k for k, h in enumerate(heads) if h.strip().startswith(header))
+
+
+def _visible(page):
+    return page.eval_on_selector_all(
+        "#knots tbody tr", "rs => rs.filter(r => !r.hidden).map(r => r.dataset.name)")
+
+
+def _column_values(page, col: int) -> list[str]:
+    return page.eval_on_selector_all(
+        "#knots tbody tr",
+        f"rs => rs.filter(r => !r.hidden).map(r => r.cells[{col}].innerText.trim())")
+
+
+def test_index_loads_sorts_and_filters(page, atlas):
+    p = page.page
+    p.goto(atlas.as_uri())
+    p.wait_for_selector("#eps-plot.js-plotly-plot .main-svg")
+    names = ["3_1", "4_1", "5_1", "5_2", "6_2", "8_19"]
+    assert _visible(p) == names
+    assert p.locator("#count").inner_text() == "6 of 6 knots shown"
+
+    # sort by ε: numerically (as text, "135.11" < "78.93"), then the other way
+    col = _column(p, "ε (ground)")
+    p.locator("#knots thead th").nth(col).locator("button").click()
+    eps = [float(v) for v in _column_values(p, col)]
+    assert eps == sorted(eps) and len(eps) == 6
+    assert eps[0] < 80 < eps[-1]
+    assert p.locator("#knots thead th").nth(col).get_attribute("aria-sort") == "ascending"
+    p.locator("#knots thead th").nth(col).locator("button").click()
+    assert [float(v) for v in _column_values(p, col)] == sorted(eps, reverse=True)
+
+    # the tube model: 3 knots have values, the other 3 (a dash) stay last in both directions
+    p.select_option("#model", "tube")
+    vals = _column_values(p, col)
+    assert vals[3:] == ["—"] * 3
+    tube = [float(v) for v in vals[:3]]
+    assert tube == sorted(tube, reverse=True)
+    p.locator("#knots thead th").nth(col).locator("button").click()
+    vals = _column_values(p, col)
+    assert [float(v) for v in vals[:3]] == sorted(tube) and vals[3:] == ["—"] * 3
+    p.select_option("#model", "bead")
+
+    # names sort naturally
+    p.locator("#knots thead th").nth(_column(p, "knot")).locator("button").click()
+    assert _visible(p) == names
+
+    # filters: text (name, shapes, families) and ground shape
+    p.fill("#filter", "4c")
+    assert _visible(p) == ["4_1", "5_2"]
+    p.fill("#filter", "8_19")
+    assert _visible(p) == ["8_19"]
+    assert p.locator("#count").inner_text() == "1 of 6 knots shown"
+    p.fill("#filter", "")
+    p.select_option("#shape-filter", "CB(2)")
+    assert _visible(p) == ["3_1", "5_1"]
+    p.select_option("#shape-filter", "")
+    assert len(_visible(p)) == 6
+
+    # the ε–n² plot: one point per knot of the model shown
+    n_points = p.evaluate("""() => document.getElementById('eps-plot').data
+        .filter(t => t.meta && t.meta.model && t.visible !== false)
+        .reduce((s, t) => s + t.x.length, 0)""")
+    assert n_points == 6
+    assert p.locator("#eps-plot .scatterlayer .trace .points path").count() >= 6
+    assert p.locator("#families tbody tr").count() == 5  # 4 shapes and the totals
+    page.check()
+
+
+def _nonblank_fraction(png: bytes) -> tuple[float, int]:
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(io.BytesIO(png))[..., :3]
+    ink = np.any(img < 0.9, axis=-1)
+    colours = len({tuple(c) for c in np.round(img[ink] * 8).astype(int)})
+    return float(ink.mean()), colours
+
+
+def test_knot_page_renders_each_state_in_3d(page, atlas):
+    p = page.page
+    p.goto((atlas.parent / "knots" / "4_1.html").as_uri())
+    p.wait_for_selector("#view3d.js-plotly-plot .gl-container canvas")
+    p.wait_for_timeout(300)
+    assert "WebGL is not supported" not in p.inner_text("body")
+    assert p.locator("#view3d").evaluate("d => d.data[0].type") == "mesh3d"
+    shot = p.locator("#view3d").screenshot()
+    ink, colours = _nonblank_fraction(shot)
+    assert 0.01 < ink < 0.6, ink  # a tube is drawn, not a blank or a filled box
+    assert colours > 10  # shaded and coloured along the arclength
+    assert "ground: 4C" in p.inner_text("#view-caption")
+
+    # the metastable state, by a click on its row of the table
+    p.locator("tr.state-row", has_text="metastable 1").click()
+    p.wait_for_timeout(300)
+    assert "metastable 1: 80" in p.inner_text("#view-caption")
+    assert p.locator("#state-select").input_value() == "1"
+    shot2 = p.locator("#view3d").screenshot()
+    assert shot2 != shot and _nonblank_fraction(shot2)[0] > 0.01
+    page.check()
+
+
+@pytest.mark.slow  # about 1-2 s a page
+def test_every_knot_page_loads_from_disk_without_errors(page, atlas):
+    p = page.page
+    for path in sorted((atlas.parent / "knots").glob("*.html")):
+        p.goto(path.as_uri())
+        p.wait_for_selector("#view3d.js-plotly-plot .gl-container canvas")
+        n_options = p.locator("#state-select option").count()
+        n_rows = p.locator("tr.state-row").count()
+        assert n_options == n_rows >= 1, path.name
+        assert re.search(r"\d+\.\d\d", p.inner_text("table.states"))
+    # the links of the index lead to the pages, and back
+    p.goto(atlas.as_uri())
+    p.locator("#knots tbody tr[data-name='5_2'] td:nth-child(2) a").click()
+    p.wait_for_selector("#view3d .gl-container canvas")
+    assert p.locator("h1").inner_text() == "5_2"
+    p.locator("nav.top a", has_text="all knots").click()
+    p.wait_for_selector("#knots")
+    page.check()
