@@ -24,9 +24,11 @@ equal length ``h_p = l_p / K_p``; its unknowns are the unit tangents ``t_0 .. t_
 nodes ``s_j = j h_p``. The end tangents are not free: at a junction they are ``+-d`` for a
 unit *direction* ``d`` of that junction, shared by every strand of a point-braid bunch (its
 axis) or by the two arcs of one strand through a multiple point (the strand keeps its tangent:
-no angle, §V B 1). Positions follow by the trapezoidal rule,
-``r_end - r_start = h_p [t_0/2 + t_1 + ... + t_{K_p-1} + t_{K_p}/2]`` (three closure
-constraints per arc, the junction positions being unknowns), and the energy of the arc is
+angles are forbidden, §V B "Structure"). The curve is inextensible: the tangent is a unit
+vector at every node and the arc length is ``K_p h_p``; positions are the trapezoidal integral
+of the tangent field, ``r_end - r_start = h_p [t_0/2 + t_1 + ... + t_{K_p-1} + t_{K_p}/2]``
+(three closure constraints per arc, the junction positions being unknowns), and the energy of
+the arc is
 
     E_p = m_p (C / h_p) sum_j (1 - t_j . t_{j+1}) = m_p (C / 2 h_p) sum_j |t_{j+1} - t_j|^2,
 
@@ -45,8 +47,11 @@ tiny proximal shift for exact symmetry modes) and interpolated to the next ``K``
 solution the closure multipliers are minus the constant vectors ``A_p`` of (e:A_P) (the
 Euler-Lagrange equation of the arc is ``t'' = -lam_p + nu t``; so (e:BC_P_A) is the
 stationarity in the junction positions), the length multiplier is the tension ``mu``
-(checked against ``mu = E/L``, (e:mu_closed)), and the sign of the reduced Hessian on the
-constraint tangent space tells a minimum from a saddle.
+(``mu = E/L``, (e:mu_closed), holds at every ``K`` because the discrete problem is exactly
+scale covariant, so it checks the convergence of the KKT solve; the continuum check is the
+first integral in :func:`cage_shooting`), and the sign of the reduced Hessian on the
+constraint tangent space tells a minimum from a saddle (at coarse levels a saddle is left
+along its negative mode).
 
 Structures
 ----------
@@ -75,6 +80,27 @@ the same ``eps*_4C`` (the 4_1 and 5_2 cages share it). Likewise nothing here for
 pass through each other: the solver minimises over the structure's geometry and the results
 report the distances between arcs so that one can check that the minimiser does not change
 the knot type.
+
+Results (:func:`structure_energy`, ``K`` up to 256 per unit weight, 512 for the cage)
+------------------------------------------------------------------------------------
+* ``CB(i)``: ``2 pi^2 i^2`` to ``1e-13`` relative (the discrete minimiser is the regular
+  polygon).
+* ``80``: ``142.58436822078`` (formula: ``142.584368220781``), error estimate ``2e-10``; circle
+  length fraction ``0.372074 = (2 pi^2 / eps_80)^(1/2)``, no force between circle and 8,
+  ``|A_8| / mu = alpha_8 = 1.5332``; the energy does not depend on where the circle touches.
+* ``PBL(1)``: ``73.3324298`` ``= 4 eps_loop`` to ``6e-10``.
+* ``4C``: ``eps*_4C = 126.4724695555 +- 2e-10`` (the shooting of one arc,
+  :func:`cage_shooting`, agrees to ``1e-11``), inside the paper's ``(8 pi^2, 129.6)`` and below
+  this package's finite-width Monte Carlo (128.4 beads, 126.7 thin tube), so the hierarchy
+  (e:hierarchy) CB(2) < 4C < 80 < CB(3) < PBL(2) holds. The minimiser has perpendicular axes,
+  both perpendicular to ``AB``; ``|AB| = 0.15802 L``; four congruent arcs of length ``L/4``
+  (so (e:epsilon*_parts) case (iii) applies: ``eps_4C = 16 eps_arc``, ``eps_arc = 7.90449``),
+  close to a sphere of radius ``0.0754 L`` (rms deviation 3 %); each arc stays in its own
+  quarter wedge around ``AB`` and arcs meet only at ``A`` and ``B`` (two arcs leaving the same
+  side separate as ``14.7 s^2 / L``). The reduced Hessian is positive definite (no zero mode
+  once the gauge is fixed): a strict local minimum, found from every start tried. Holding the
+  axes at ``psi < 90`` degrees costs energy (:func:`cage_axis_scan`: 126.58 at 85, 127.40 at 75,
+  129.17 at 60, 131.57 at 45, 134.77 at 30), so perpendicular axes are the optimum.
 """
 
 from __future__ import annotations
@@ -739,7 +765,7 @@ def solve_structure(structure: Structure, Ks: Sequence[int] = (16, 32, 64, 128, 
     opt_err = max(lv.residual for lv in levels) * max(eps)
     stab = None
     if stability_K is not None:
-        stab = _stability(structure, levels, stability_K)
+        stab = _stability(levels, stability_K)
     return StructureResult(structure, best, ext_err + opt_err, ext_err, opt_err, Ks, eps, R,
                            levels, coarse, time.perf_counter() - t0, stab)
 
@@ -782,7 +808,7 @@ def _coarse_minimum(prob: _Problem, x: np.ndarray, max_escapes: int = 4
     return x, lam, info
 
 
-def _stability(structure: Structure, levels: list[LevelSolution], K: int) -> dict:
+def _stability(levels: list[LevelSolution], K: int) -> dict:
     """Spectrum of the Hessian of the Lagrangian on the tangent space of the constraints."""
     lv = next((lv for lv in levels if lv.K == K), None)
     if lv is None:
@@ -831,13 +857,6 @@ def _arc_distance(P: np.ndarray, Q: np.ndarray, trim: float) -> tuple[float, flo
     d, i, j = _polyline_distance(np.ascontiguousarray(P), np.ascontiguousarray(Q),
                                  i0, i1, j0, j1)
     return float(d), (i + 0.5) / nP, (j + 0.5) / nQ
-
-
-def _resample(curve: np.ndarray, n: int = 400) -> np.ndarray:
-    seg = np.linalg.norm(np.diff(curve, axis=0), axis=1)
-    s = np.r_[0.0, np.cumsum(seg)]
-    t = np.linspace(0.0, s[-1], n)
-    return np.column_stack([np.interp(t, s, curve[:, k]) for k in range(3)])
 
 
 def _curvature_vectors(T: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
@@ -994,6 +1013,12 @@ def four_fold_cage(axis_angle: float | None = None, *, radius: float = 1.0,
     There is no twist variable: at ``w = 0`` the twists inside a point-braid cost nothing and
     only decide how the strands are connected through it, so every cage with given box twists
     (the 4_1 and the 5_2 among them) has this one energy.
+
+    The sides are assigned one arc per pair ``(+-a, +-b)`` (the four quadrants of the cage
+    around ``AB``). The other assignment allowed by "two arcs on each side", two arcs
+    ``(+a, +b)`` and two ``(-a, -b)``, is not a cage: its minimiser lets one pair shrink and
+    the other merge into a doubly covered circle, ``eps -> 8 pi^2`` (the circular braid of
+    closed 2-braids).
 
     Parameters
     ----------
