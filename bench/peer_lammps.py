@@ -11,8 +11,11 @@ For each knot and seed: LAMMPS anneals the braid embedding that stiffknots start
 minimisation) and its wall time and final ε are recorded; then stiffknots anneals the same
 chain on one core with its default settings and ``target_epsilon`` = LAMMPS's ε, which gives
 its wall time to the same ε. The two never run at the same time (each gets one core). The
-table printed at the end gives the ratio LAMMPS s / stiffknots s-to-the-same-ε and medians;
-the raw numbers go to bench/peer_lammps.json.
+table printed at the end gives the ratio LAMMPS s / stiffknots s-to-the-same-ε (wall clock,
+and CPU seconds in brackets: on a shared machine the wall clock includes time taken by other
+jobs) and medians; a second table does the same for LAMMPS stopped after its first 10⁵ CG
+iterations (almost all of the minimisation's gain). Raw numbers, with both final chains,
+their shape class and closest bead and bond distances: bench/peer_lammps.json.
 
 The LAMMPS model (units lj, bond length 1, C = 1, k_B = 1, matching stiffknots):
 
@@ -55,6 +58,7 @@ import ctypes
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 import time
@@ -318,6 +322,14 @@ def _shape(coords: np.ndarray) -> str:
     return f"{sh.label}{sh.multiplicity or ''}" if sh.label == "CB" else sh.label
 
 
+def _segment_distance(coords: np.ndarray) -> float:
+    """Closest approach of two non-adjacent bonds (the bead rule lets it fall well below
+    1/√2; the tube model would keep it ≥ w)."""
+    from stiffknots.chain import Chain
+
+    return float(Chain(np.asarray(coords, dtype=float)).min_segment_distance())
+
+
 def _plain(coords: np.ndarray) -> list:
     return np.round(np.asarray(coords, dtype=float), 9).tolist()
 
@@ -337,10 +349,13 @@ def compare(knots: list[str], seeds: list[int], beads: int = 150, steps: int = 1
             log(f"{name} seed {seed}: LAMMPS ε {lm['epsilon']:.3f} in {lm['wall_seconds']:.1f} s "
                 f"(knot {lm['knot_found']}{'' if lm['knot_ok'] else ' — TOPOLOGY CHANGED'}, "
                 f"bonds {lm['bond_min']:.4f}–{lm['bond_max']:.4f}, "
-                f"min non-bonded {lm['min_nonbonded_distance']:.4f})")
+                f"min non-bonded {lm['min_nonbonded_distance']:.4f}, "
+                f"min bond-bond {_segment_distance(lm['coords']):.4f})")
             row = {"knot": name, "seed": seed, "beads": beads,
                    "lammps": {k: v for k, v in lm.items() if k != "coords"}}
-            row["lammps"].update(shape=_shape(lm["coords"]), coords=_plain(lm["coords"]))
+            row["lammps"].update(shape=_shape(lm["coords"]),
+                                 min_segment_distance=_segment_distance(lm["coords"]),
+                                 coords=_plain(lm["coords"]))
             if lm["knot_ok"]:
                 sk = run_stiffknots(x, lm["epsilon"], seed)
                 from stiffknots.knots.identify import verify_knot
@@ -349,6 +364,7 @@ def compare(knots: list[str], seeds: list[int], beads: int = 150, steps: int = 1
                 sk_ok, sk_found = verify_knot(xs, name)
                 sk.update(knot_ok=bool(sk_ok), knot_found=sk_found, shape=_shape(xs),
                           min_nonbonded_distance=min_nonbonded_distance(xs),
+                          min_segment_distance=_segment_distance(xs),
                           coords=_plain(xs))
                 t = sk["seconds_to_target"]
                 tc = sk["cpu_seconds_to_target"]
@@ -444,6 +460,14 @@ def table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def dumps(result: dict) -> str:
+    """JSON, indented, with every list of numbers (coordinates, traces) on one line."""
+    text = json.dumps(result, indent=1)
+    return re.sub(r"\[\s+([-+\d.eE,\s]+?)\s+\]",
+                  lambda m: "[" + ", ".join(m.group(1).split(",")).replace("  ", "")
+                  .replace("\n", "").replace(" ,", ",") + "]", text)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--knots", default="3_1,4_1", help="comma-separated knot names")
@@ -472,7 +496,7 @@ def main(argv: list[str] | None = None) -> int:
     result = compare(knots, list(range(1, a.seeds + 1)), a.beads, a.steps,
                      contact=a.contact, contact_at=a.contact_at, min_iter=a.min_iter)
     print(table(result))
-    Path(a.out).write_text(json.dumps(result, indent=2))
+    Path(a.out).write_text(dumps(result))
     print(f"wrote {a.out}")
     return 0
 
