@@ -8,7 +8,7 @@ Writes ``OUT_DIR/index.html`` (with ``knots/``, ``thumbs/``, ``plotly.min.js``) 
 screenshots ``OUT_DIR/screenshot-index.png`` (the top of the index page),
 ``OUT_DIR/screenshot-index-full.png`` (all of it) and
 ``OUT_DIR/screenshot-knot.png`` (the page of 4_1 with its 3D view). The chains are synthetic
-(``tests/report/atlas_support.py``), not annealed results.
+(``tests/atlas_support.py``), not annealed results.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests" / "report"))
+sys.path.insert(0, str(HERE.parent / "tests"))
 
 from atlas_support import (  # noqa: E402
     chromium_context,

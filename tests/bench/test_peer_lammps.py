@@ -9,7 +9,7 @@ import pytest
 
 from stiffknots.chain import Chain
 
-_PATH = Path(__file__).resolve().parents[1] / "bench" / "peer_lammps.py"
+_PATH = Path(__file__).resolve().parents[2] / "bench" / "peer_lammps.py"
 
 
 @pytest.fixture(scope="module")
