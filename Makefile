@@ -25,7 +25,7 @@ bench: $(STAMP)  ## benchmarks that print numbers (see bench/RESULTS.md)
 	$(PY) bench/run_bench.py
 
 lint: $(STAMP)  ## ruff, and the layer contracts of pyproject.toml (import-linter)
-	$(VENV)/bin/ruff check src tests bench
+	$(VENV)/bin/ruff check src tests bench scripts
 	$(VENV)/bin/lint-imports
 
 clean:

@@ -26,7 +26,6 @@ from atlas_support import (  # noqa: E402
     synthetic_families,
     synthetic_knots,
 )
-
 from stiffknots.report.atlas import write_atlas  # noqa: E402
 
 
