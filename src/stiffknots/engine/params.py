@@ -42,7 +42,7 @@ class MoveParams:
     w : tube diameter (``tube`` model only).
     energy : ``"bending"`` — the paper's E_d = Σ (1 − cos θ_n) (§VII) — or ``"power"`` —
         Σ (1 − cos θ_n)^power, whose minimum approaches the smallest achievable largest
-        turning angle as ``power`` grows (the restricted-curvature search, §IX.D).
+        turning angle as ``power`` grows (the restricted-curvature search, §IX D).
     power : exponent of the ``"power"`` energy (integer ≥ 1).
     energy_scale : the ``"power"`` energy is Σ ((1 − cos θ_n)/energy_scale)^power.
     max_turn : largest turning angle θ_max allowed at any joint (radians), or None for no

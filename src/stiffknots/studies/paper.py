@@ -24,7 +24,7 @@ from stiffknots._json import json_default
 from stiffknots._version import __version__
 
 PAPER_KNOTS = ("3_1", "4_1", "5_2", "6_2", "6_3")
-# the Monte Carlo shapes of the paper (§VII, Fig. 7)
+# the Monte Carlo shapes of the paper (§VII, Fig. 6)
 PAPER_MC = {"3_1": "CB (i = 2)", "4_1": "4C, ε = 129.6", "5_2": "4C (ground), 80 (metastable)",
             "6_2": "80", "6_3": "80"}
 PAPER_4C = 129.6
@@ -226,7 +226,7 @@ def _write_report(out: Path, s: dict) -> None:
                   "under the bead rule with a small distance exists because of that.")
     doc.heading("Against the theory", 2)
     h = s["hierarchy"]
-    doc.paragraph("Hierarchy (e:hierarchy): " + " < ".join(
+    doc.paragraph("Hierarchy (eq. (39)): " + " < ".join(
         f"{lab} {v:.2f}" for lab, v in h["order"]) + f" — holds: {h['holds']}.")
     items = []
     for name, k in s["knots"].items():
