@@ -122,7 +122,7 @@ def test_resume_refuses_another_run(tmp_path):
 
 
 def test_anneal_checkpoint_dir(tmp_path):
-    kw = dict(moves=200_000, replicas=1, seed=4, workers=1)
+    kw = dict(moves=200_000, replicas=1, seed=4, workers=1, rounds=1)
     a = anneal("3_1", **kw)
     b = anneal("3_1", **kw, checkpoint_dir=tmp_path)
     assert checkpoint_path(tmp_path, 0).exists()
@@ -145,7 +145,7 @@ def test_cli_resume_needs_checkpoint():
 def test_cli_checkpoint_resume(tmp_path):
     def cli(*extra):
         p = subprocess.run([sys.executable, "-m", "stiffknots.cli", "anneal", "4_1", "--moves",
-                            "300000", "--replicas", "1", "--json", *extra],
+                            "300000", "--replicas", "1", "--rounds", "1", "--json", *extra],
                            capture_output=True, text=True, timeout=600)
         assert p.returncode == 0, p.stderr
         return json.loads(p.stdout)

@@ -34,13 +34,6 @@ from stiffknots.cli.app import (
 )
 
 
-def shape_of(coords, params):
-    """The shape class of a closed chain (stiffknots.analysis.classify, §VII)."""
-    from stiffknots.analysis import classify
-
-    return classify(coords, d=params.w if params.exclusion == "tube" else params.d)
-
-
 def save_results(res, out_dir: Path, title: str, command: str) -> dict:
     """``res.save`` plus a picture of the best chain and the manifest (written last)."""
     from stiffknots.report.render import save_chain_png
@@ -58,6 +51,10 @@ def anneal(
     moves: Annotated[int | None, typer.Option(
         help="Attempted moves per replica (default: 30,000,000).")] = None,
     replicas: ReplicasOpt = 2,
+    rounds: Annotated[int, typer.Option(
+        help="Most rounds of --replicas replicas: after each round the run stops if the "
+             "lowest state (shape, ε within 0.1 %) was reached by 2 replicas; 1 = a fixed "
+             "budget.")] = 4,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper, d=1/√2) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model; default 1/√2).")
@@ -107,16 +104,17 @@ def anneal(
     out_dir = prepare_out(out_dir, overwrite)
     problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
-                           resume=resume, start=start)
-    with ReplicaProgress(f"anneal {problem.knot_name}", replicas, disable=json_) as bars:
+                           resume=resume, start=start, rounds=rounds)
+    with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
+                         disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None
     check_interrupted(res, hint)
     width = width_of(params, beads)
     d = res.to_dict()
-    shape = shape_of(res.best.coords, params)
-    d["shape"], d["multiplicity"] = shape.label, shape.multiplicity
-    d["shape_reason"] = shape.reason
+    obs = res.best.observables
+    d["shape"], d["multiplicity"] = obs["label"], obs["multiplicity"]
+    d["shape_reason"] = obs["shape_reason"]
     d["width"] = width
     if checkpoint is not None:
         d["checkpoint_dir"] = str(checkpoint)
@@ -128,19 +126,22 @@ def anneal(
         finish(res, replicas, hint)
         return
     t = Table(title=escape(f"{res.knot}, {width['text']}, {moves:,} moves/replica"))
-    for col in ("replica", "seed", "start", "ε", "knot", "min seg dist", "acc single",
+    for col in ("replica", "seed", "start", "ε", "shape", "knot", "min seg dist", "acc single",
                 "acc multi", "s"):
         t.add_column(col, justify="right")
     for r in res.replicas:
         t.add_row(str(r.replica), str(r.seed), str(r.start), f"{r.epsilon:.4f}",
+                  r.observables["shape"],
                   escape(str(r.knot)) + (" ✓" if r.knot_verified else " ✗"),
                   f"{r.min_segment_distance:.3f}", f"{r.acceptance['single']['rate']:.3f}",
                   f"{r.acceptance['multi']['rate']:.3f}", f"{r.wall_time:.1f}")
     out.print(t)
     b = res.bounds
-    out.print(f"shape of the best chain: {shape.label}"
-              + (f" (i = {shape.multiplicity})" if shape.label == "CB" else "")
-              + f" — {shape.reason}", markup=False, highlight=False)
+    out.print(f"shape of the best chain: {obs['label']}"
+              + (f" (i = {obs['multiplicity']})" if obs["label"] == "CB" else "")
+              + f" — {obs['shape_reason']}", markup=False, highlight=False)
+    out.print(("converged: " if res.converged else "NOT converged: ") + res.convergence,
+              markup=False, highlight=False)
     out.print(f"best ε = {res.best.epsilon:.4f} at {width['text']} (a finite width: the thin "
               f"limit w/L → 0 lies below); bounds [{fmt(b['lower'])}, {fmt(b['upper'])}] "
               f"({b['attained_by']}); wall time {res.wall_time:.1f} s",

@@ -97,6 +97,17 @@ class Job:
     checkpoint_seconds: float | None = None
 
 
+def observe_shape(r: Replica, params) -> None:
+    """Classify a closed replica's chain (:func:`stiffknots.analysis.classify`, §VII) with the
+    exclusion distance of its run; store ``shape`` ('CB2', '4C', '80', 'other'), ``label``,
+    ``multiplicity`` and ``shape_reason`` in its observables."""
+    from stiffknots.analysis import classify
+
+    s = classify(r.coords, d=params.w if params.exclusion == "tube" else params.d)
+    r.observables.update(shape=f"CB{s.multiplicity}" if s.label == "CB" else s.label,
+                         label=s.label, multiplicity=s.multiplicity, shape_reason=s.reason)
+
+
 def knot_code(coords: np.ndarray, closed: bool = True) -> str:
     """The HOMFLY-PT polynomial (topoly's chiral code) of a chain; an open chain is closed
     along its z axis first (§VIII)."""
@@ -173,6 +184,9 @@ class ReplicaSet:
     interrupted: bool = False
     version: str = __version__
     bounds: dict = field(default_factory=dict)
+    converged: bool | None = None
+    convergence: str = ""
+    rounds: int = 1
 
     @property
     def best(self) -> Replica:
@@ -189,6 +203,8 @@ class ReplicaSet:
         ok = bool(self.replicas) and all(r.knot_verified for r in self.replicas)
         return {"problem": self.problem, "knot": self.knot, "beads": self.beads,
                 "seed": self.seed, **self.physics(), "bounds": self.bounds, "knot_verified": ok,
+                "converged": self.converged, "convergence": self.convergence,
+                "rounds": self.rounds,
                 "settings": self.settings, "wall_time": self.wall_time,
                 "interrupted": self.interrupted, "version": self.version,
                 "replicas": [r.summary() for r in self.replicas]}
@@ -237,11 +253,31 @@ class Problem:
     knot_name: str
     beads: int
     seed: int
+    replicas: int
+    #: the most rounds of ``replicas`` replicas :func:`solve` runs until the verdict is
+    #: "converged" (1: a fixed budget)
+    rounds: int = 1
+    #: converged: the lowest state reached by at least ``agree`` replicas …
+    agree: int = 2
+    #: … of the same shape and value within ``rel_tol`` (relative) of the lowest
+    rel_tol: float = 1e-3
 
-    def jobs(self) -> list[Job]:
+    def jobs(self, first: int = 0) -> list[Job]:
+        """The jobs of replicas ``first`` … ``first + replicas − 1`` (one round)."""
         raise NotImplementedError
 
+    def state_of(self, r: Replica) -> tuple[str, float]:
+        """The state a finished replica reached: (shape label, value); replicas of the same
+        label and value within ``rel_tol`` are one state (see :func:`verdict`)."""
+        return "", self.sort_key(r)
+
     # -- helpers of the subclasses' constructors and jobs -----------------------------------
+
+    def _verdict_rule(self, rounds: int, agree: int, rel_tol: float) -> None:
+        """The convergence rule (:func:`verdict`), validated."""
+        self.rounds = V.integer("rounds", rounds, 1, 100)
+        self.agree = V.integer("agree", agree, 1, V.MAX_REPLICAS)
+        self.rel_tol = V.number("rel_tol", rel_tol, 0, 1, lo_open=True)
 
     def _setup(self, knot: str, replicas: int, seed: int, beads: int | None = None) -> None:
         """The knot (catalogue entry and name), replicas, seed and beads, validated."""
@@ -253,6 +289,10 @@ class Problem:
         self.seed = V.seed(seed)
         if beads is not None:
             self.beads = V.beads(beads)
+
+    def _start(self, r: int) -> str:
+        """The starting embedding of replica r (the per-replica starts, round-robin)."""
+        return self.starts[r % len(self.starts)]
 
     def _closed_starts(self, start) -> None:
         """One starting embedding per replica (``self.starts``), their chains and their
@@ -268,14 +308,16 @@ class Problem:
     def _replica_jobs(self, settings: AnnealSettings, coords: Callable[[int], np.ndarray],
                       start: Callable[[int], str], code: Callable[[int], str],
                       checkpoint_dir=None, resume: bool = False,
-                      checkpoint_seconds: float | None = None) -> list[Job]:
-        """One job per replica, its seed derived from the problem's seed."""
-        return [Job(replica=r, seed=s, coords=coords(r), settings=settings, knot=self.knot_name,
-                    start=start(r), start_code=code(r),
+                      checkpoint_seconds: float | None = None, first: int = 0) -> list[Job]:
+        """One job per replica ``first`` … ``first + replicas − 1``; replica r's seed is the
+        r-th seed derived from the problem's seed, whatever the round it runs in."""
+        seeds = replica_seeds(self.seed, first + self.replicas)
+        return [Job(replica=r, seed=seeds[r], coords=coords(r), settings=settings,
+                    knot=self.knot_name, start=start(r), start_code=code(r),
                     checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
                                 if checkpoint_dir is not None else None),
                     resume=resume, checkpoint_seconds=checkpoint_seconds)
-                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
+                for r in range(first, first + self.replicas)]
 
     def bounds(self) -> dict:
         return {}
@@ -293,11 +335,35 @@ class Problem:
         return {}
 
 
+def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
+    """Has the search converged? True when the lowest state — the best replica's shape, and a
+    value within ``problem.rel_tol`` of the lowest — was reached by at least
+    ``problem.agree`` replicas; and a sentence saying why (or why not)."""
+    if not replicas:
+        return False, "no replica finished"
+    states = [problem.state_of(r) for r in replicas]
+    best = min(range(len(states)), key=lambda k: states[k][1])
+    label, value = states[best]
+    tol = problem.rel_tol * max(abs(value), 1e-300)
+    hits = sum(1 for lab, v in states if lab == label and v - value <= tol)
+    name = f"{label}, {value:.6g}" if label else f"{value:.6g}"
+    if hits >= problem.agree:
+        return True, (f"the lowest state ({name}) was reached by {hits} of {len(replicas)} "
+                      f"replicas (within {problem.rel_tol:.0e})")
+    return False, (f"the lowest state ({name}) was reached by {hits} of {len(replicas)} "
+                   f"replicas; {problem.agree} needed (within {problem.rel_tol:.0e})")
+
+
 def solve(problem: Problem, *, workers: int | None = None,
           on_replica_done: Callable[[Replica], None] | None = None,
           on_progress: Callable[[dict], None] | None = None) -> ReplicaSet:
     """Run every job of ``problem`` on ``workers`` processes (default: all cores) and return
     its verified replicas, best first.
+
+    The replicas run in rounds of ``problem.replicas``; after each round the verdict
+    (:func:`verdict`) decides: converged — stop; not converged — run another round, up to
+    ``problem.rounds`` (easy knots stop early, hard ones get more). The result carries
+    ``converged`` and the reason.
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
@@ -308,8 +374,7 @@ def solve(problem: Problem, *, workers: int | None = None,
     TopologyChangedError
         If a replica ends with another knot type (never expected: a bug, never a data point).
     """
-    jobs = problem.jobs()
-    nw = workers or default_workers(len(jobs))
+    nw = workers or default_workers(problem.replicas)
     t0 = time.perf_counter()
 
     def done(r: Replica) -> None:
@@ -317,16 +382,29 @@ def solve(problem: Problem, *, workers: int | None = None,
         if on_replica_done is not None:
             on_replica_done(r)
 
-    results, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress)
+    results: list[Replica] = []
+    interrupted = False
+    converged, reason, rounds = False, "no replica finished", 0
+    for rnd in range(max(1, problem.rounds)):
+        jobs = problem.jobs(first=rnd * problem.replicas)
+        new, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress)
+        bad = [r for r in new if not r.knot_verified]
+        if bad:
+            raise TopologyChangedError(
+                f"{len(bad)} replica(s) of {problem.knot_name} ended as "
+                f"{', '.join(str(r.knot) for r in bad)}; this is a bug in stiffknots, please "
+                f"report it with the seed {problem.seed} and the settings")
+        results += new
+        rounds = rnd + 1
+        converged, reason = verdict(problem, results)
+        if interrupted or converged:
+            break
+    if not converged and not interrupted and problem.rounds > 1:
+        reason += f" after {rounds} rounds (the budget)"
     results.sort(key=problem.sort_key)
-    bad = [r for r in results if not r.knot_verified]
-    if bad:
-        raise TopologyChangedError(
-            f"{len(bad)} replica(s) of {problem.knot_name} ended as "
-            f"{', '.join(str(r.knot) for r in bad)}; this is a bug in stiffknots, please "
-            f"report it with the seed {problem.seed} and the settings")
     return problem.result_type(
         knot=problem.knot_name, beads=problem.beads, seed=problem.seed,
         settings=problem.settings_dict(), replicas=results,
         wall_time=time.perf_counter() - t0, interrupted=interrupted,
-        bounds=problem.bounds(), **problem.result_fields(results))
+        bounds=problem.bounds(), converged=converged, convergence=reason, rounds=rounds,
+        **problem.result_fields(results))

@@ -19,9 +19,10 @@ from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter
 from stiffknots.problems import validate as V
-from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve
+from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, observe_shape, solve
 
 DEFAULT_MOVES = AnnealSettings.moves  # 30 M: relaxation + annealing (schedules.py)
+DEFAULT_ROUNDS = 4  # rounds of replicas until the lowest state is reached twice
 
 
 @dataclass
@@ -51,10 +52,12 @@ class ClosedAnneal(Problem):
                  target_epsilon: float | None = None,
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0,
-                 start: str | Sequence[str] = "all"):
+                 start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
+                 agree: int = 2, rel_tol: float = 1e-3):
         from stiffknots.theory.bounds import closed_bounds
 
         self._setup(knot, replicas, seed, beads)
+        self._verdict_rule(rounds, agree, rel_tol)
         if resume and checkpoint_dir is None:
             raise InvalidParameter("checkpoint_dir", None, "given when resume=True",
                                    "the folder of the checkpoints")
@@ -74,10 +77,17 @@ class ClosedAnneal(Problem):
         self.checkpoint_seconds = checkpoint_seconds
         self._bounds = closed_bounds(self.knot.bridge_number, self.knot.braid_index)
 
-    def jobs(self) -> list[Job]:
-        return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
-                                  lambda r: self.starts[r], lambda r: self.codes[self.starts[r]],
-                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds)
+    def jobs(self, first: int = 0) -> list[Job]:
+        return self._replica_jobs(self.settings, lambda r: self.chains[self._start(r)],
+                                  self._start, lambda r: self.codes[self._start(r)],
+                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds,
+                                  first)
+
+    def state_of(self, r: Replica) -> tuple[str, float]:
+        return r.observables["shape"], r.epsilon
+
+    def observe(self, r: Replica) -> None:
+        observe_shape(r, self.settings.params)
 
     def bounds(self) -> dict:
         b = self._bounds
@@ -104,6 +114,10 @@ def anneal(
     resume: bool = False,
     checkpoint_seconds: float | None = 60.0,
     start: str | Sequence[str] = "all",
+    rounds: int = DEFAULT_ROUNDS,
+    agree: int = 2,
+    rel_tol: float = 1e-3,
+    on_progress: Callable[[dict], None] | None = None,
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -134,6 +148,12 @@ def anneal(
         that exists for the knot among braid and cage, shared round-robin among the
         replicas), or one start per replica (a sequence of ``replicas`` names). Recorded in
         the settings and in every replica.
+    rounds, agree, rel_tol : the convergence rule: after each round of ``replicas`` replicas,
+        the run stops when the lowest state (its shape class and ε within ``rel_tol``) was
+        reached by at least ``agree`` replicas, and otherwise runs another round, up to
+        ``rounds`` rounds; ``rounds=1`` is a fixed budget. The result says ``converged`` and
+        why (:func:`stiffknots.problems.base.verdict`).
+    on_progress : receives progress records of the running replicas (moves done, best ε).
 
     Returns
     -------
@@ -150,5 +170,7 @@ def anneal(
     problem = ClosedAnneal(knot, beads, moves, replicas, seed, schedule=schedule, params=params,
                            quench_fraction=quench_fraction, target_epsilon=target_epsilon,
                            checkpoint_dir=checkpoint_dir, resume=resume,
-                           checkpoint_seconds=checkpoint_seconds, start=start)
-    return solve(problem, workers=workers, on_replica_done=on_replica_done)
+                           checkpoint_seconds=checkpoint_seconds, start=start, rounds=rounds,
+                           agree=agree, rel_tol=rel_tol)
+    return solve(problem, workers=workers, on_replica_done=on_replica_done,
+                 on_progress=on_progress)

@@ -130,9 +130,12 @@ class OpenExtension(Problem):
         self.code = start_code(self.knot_name, self.coords, False, "open")
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)
 
-    def jobs(self) -> list[Job]:
+    def jobs(self, first: int = 0) -> list[Job]:
         return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open",
-                                  lambda r: self.code)
+                                  lambda r: self.code, first=first)
+
+    def state_of(self, r: Replica) -> tuple[str, float]:
+        return open_shape(r.coords)["label"], self.sort_key(r)
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}

@@ -163,10 +163,10 @@ class OpenForce(Problem):
         self.checkpoint_seconds = checkpoint_seconds
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)
 
-    def jobs(self) -> list[Job]:
+    def jobs(self, first: int = 0) -> list[Job]:
         return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open",
                                   lambda r: self.code, self.checkpoint_dir, self.resume,
-                                  self.checkpoint_seconds)
+                                  self.checkpoint_seconds, first)
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}

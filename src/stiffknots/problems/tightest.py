@@ -112,9 +112,10 @@ class Tightest(Problem):
         self._bounds = restricted_curvature_bounds(self.knot.bridge_number,
                                                    self.knot.braid_index, R=1.0)
 
-    def jobs(self) -> list[Job]:
-        return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
-                                  lambda r: self.starts[r], lambda r: self.codes[self.starts[r]])
+    def jobs(self, first: int = 0) -> list[Job]:
+        return self._replica_jobs(self.settings, lambda r: self.chains[self._start(r)],
+                                  self._start, lambda r: self.codes[self._start(r)],
+                                  first=first)
 
     def bounds(self) -> dict:
         b = self._bounds

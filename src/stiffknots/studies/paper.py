@@ -67,8 +67,9 @@ def _anneal_model(name, model, b, seed):
 
     params = MoveParams(exclusion=model)
     starts = split_replicas(available_starts(get_knot(name), starts=STARTS), b["replicas"])
+    # the budget fixes the replicas (shared among the starts): one round, no adaptive rounds
     res = anneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed, params=params,
-                 start=starts)
+                 start=starts, rounds=1)
     d = params.w if model == "tube" else params.d
     items = []
     for r in res.replicas:
