@@ -19,6 +19,7 @@ for _name, _command in (
         ("tightest", tightest.tightest),
         ("paper", studies.paper),
         ("bench", studies.bench),
+        ("warmup", studies.warmup),
         ("version", catalogue.version)):
     app.command(_name)(_command)
 
@@ -30,8 +31,24 @@ def option_name(param: str) -> str:
     return OPTION_NAMES.get(param, "--" + param.replace("_", "-"))
 
 
+# commands that run the numba kernels: on a cold cache they say first what takes time
+_ENGINE_COMMANDS = {"anneal", "open", "tightest", "paper", "bench", "relax"}
+
+
+def _note_cold_cache() -> None:
+    import sys
+
+    from stiffknots.studies.warmup import cache_is_cold
+
+    args = [a for a in sys.argv[1:] if not a.startswith("-")]
+    if args and args[0] in _ENGINE_COMMANDS and cache_is_cold():
+        err.print("first run: numba compiles the kernels once (about a minute; "
+                  "`stiffknots warmup` does it ahead) ...", markup=False, highlight=False)
+
+
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
+    _note_cold_cache()
     try:
         rc = app(standalone_mode=False)
     except InvalidParameter as e:

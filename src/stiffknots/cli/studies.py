@@ -51,3 +51,10 @@ def paper(
     d = run_paper(budget=budget, out_dir=out_dir, seed=seed, log=None if json_ else out.print)
     if json_:
         dump(d)
+
+
+def warmup() -> None:
+    """Compile and cache the numba kernels now (make does it once after installing)."""
+    from stiffknots.studies.warmup import warmup as run
+
+    run(lambda s: out.print(s, markup=False, highlight=False))
