@@ -49,7 +49,8 @@ def anneal(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
     beads: Annotated[int, typer.Option(help="Number of beads N (bond length 1).")] = 150,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica (default: 30,000,000).")] = None,
+        help="Attempted moves per replica (default: 30,000,000 at N = 150, scaled as N²)."
+    )] = None,
     replicas: ReplicasOpt = 2,
     rounds: Annotated[int, typer.Option(
         help="Most rounds of --replicas replicas: after each round the run stops if the "
@@ -70,7 +71,7 @@ def anneal(
              "0 = plain annealing).")] = None,
     delta: Annotated[float, typer.Option(help="Single-bead rotation angle (rad).")] = math.pi / 100,
     m_max: Annotated[int | None, typer.Option(
-        help="Largest sub-chain of a crankshaft move (default: 75 ≥ N/2 at N = 150).")] = None,
+        help="Largest sub-chain of a crankshaft move (default: N/2, a whole loop).")] = None,
     checkpoint: CheckpointOpt = None,
     resume: ResumeOpt = False,
     start: StartOpt = "all",
@@ -85,14 +86,14 @@ def anneal(
     from stiffknots.engine.schedules import SCHEDULES, Schedule
     from stiffknots.knots.starts import STARTS
     from stiffknots.problems.base import solve
-    from stiffknots.problems.closed import DEFAULT_MOVES, ClosedAnneal
+    from stiffknots.problems.closed import ClosedAnneal
 
-    moves = DEFAULT_MOVES if moves is None else moves
     choice("--start", start, ("all", *STARTS))
     choice("--exclusion", exclusion, ("bead", "tube"))
     choice("--schedule", schedule, SCHEDULES)
     given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
-    sch = replace(Schedule(), kind=schedule, **{k: v for k, v in given.items() if v is not None})
+    sch = replace(Schedule().for_beads(beads), kind=schedule,
+                  **{k: v for k, v in given.items() if v is not None})
     params = replace(MoveParams(), exclusion=exclusion, delta=delta,
                      **({} if m_max is None else {"m_max": m_max}),
                      **({} if w is None else {"w": w}))
@@ -125,7 +126,8 @@ def anneal(
         dump(d)
         finish(res, replicas, hint)
         return
-    t = Table(title=escape(f"{res.knot}, {width['text']}, {moves:,} moves/replica"))
+    t = Table(title=escape(f"{res.knot}, {width['text']}, {res.settings['moves']:,} "
+                           "moves/replica"))
     for col in ("replica", "seed", "start", "ε", "shape", "knot", "min seg dist", "acc single",
                 "acc multi", "s"):
         t.add_column(col, justify="right")

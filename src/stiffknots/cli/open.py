@@ -53,7 +53,8 @@ def open_knot(
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model).")] = None,
-    m_max: Annotated[int, typer.Option(help="Largest sub-chain of a crankshaft move.")] = 60,
+    m_max: Annotated[int | None, typer.Option(
+        help="Largest sub-chain of a crankshaft move (default: N/2).")] = None,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,

@@ -21,7 +21,13 @@ from stiffknots.errors import InvalidParameter
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, observe_shape, solve
 
-DEFAULT_MOVES = AnnealSettings.moves  # 30 M: relaxation + annealing (schedules.py)
+DEFAULT_MOVES = AnnealSettings.moves  # 30 M at N = 150: relaxation + annealing (schedules.py)
+
+
+def default_moves(n_beads: int) -> int:
+    """The default budget of a replica of N beads: 30 M moves at N = 150, × (N/150)² (the
+    temperatures scale as 1/N², :meth:`Schedule.for_beads`; the moves per bead as N)."""
+    return max(1_000_000, round(DEFAULT_MOVES * (int(n_beads) / 150) ** 2))
 DEFAULT_ROUNDS = 4  # rounds of replicas until the lowest state is reached twice
 
 
@@ -46,7 +52,7 @@ class ClosedAnneal(Problem):
 
     result_type = AnnealResult
 
-    def __init__(self, knot: str, beads: int = 150, moves: int = DEFAULT_MOVES,
+    def __init__(self, knot: str, beads: int = 150, moves: int | None = None,
                  replicas: int = 2, seed: int = 0, *, schedule: Schedule | None = None,
                  params: MoveParams | None = None, quench_fraction: float = 0.1,
                  target_epsilon: float | None = None,
@@ -65,8 +71,10 @@ class ClosedAnneal(Problem):
             V.number("checkpoint_seconds", checkpoint_seconds, 0, lo_open=True)
         if target_epsilon is not None:
             V.number("target_epsilon", target_epsilon)
-        self.settings = AnnealSettings(moves=V.moves(moves), schedule=schedule or Schedule(),
-                                       params=params or MoveParams(),
+        self.settings = AnnealSettings(moves=V.moves(default_moves(self.beads) if moves is None
+                                                     else moves),
+                                       schedule=schedule or Schedule().for_beads(self.beads),
+                                       params=(params or MoveParams()).for_beads(self.beads),
                                        quench_fraction=quench_fraction,
                                        target_epsilon=target_epsilon)
         self.settings.validate()
@@ -100,7 +108,7 @@ class ClosedAnneal(Problem):
 def anneal(
     knot: str,
     beads: int = 150,
-    moves: int = DEFAULT_MOVES,
+    moves: int | None = None,
     replicas: int = 2,
     seed: int = 0,
     *,
@@ -125,12 +133,14 @@ def anneal(
     ----------
     knot : knot name in any usual spelling ('4_1', '4.1', 'K11a1', 'T(2,3)').
     beads : number of beads N (bond length 1, so the chain length L = N).
-    moves : attempted moves per replica (annealing plus the final quench).
+    moves : attempted moves per replica (annealing plus the final quench); default
+        :func:`default_moves` (30 M at N = 150, scaled as N²).
     replicas : independent replicas; they run in parallel on ``workers`` processes
         (default: all cores).
     seed : user seed; replica seeds are derived from it (recorded in every result).
     schedule, params : cooling schedule and move/exclusion parameters (defaults documented in
-        :class:`Schedule` and :class:`MoveParams`).
+        :class:`Schedule` and :class:`MoveParams`; the default schedule's temperatures scale
+        as (150/N)² and the default m_max is N/2, so that the same search runs at any N).
     quench_fraction : fraction of the moves spent in the final T = 0 quench.
     target_epsilon : if given, each replica records the wall time at which ε first fell below.
     on_replica_done : callback called in the parent process as each replica finishes.

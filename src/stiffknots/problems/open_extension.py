@@ -119,13 +119,14 @@ class OpenExtension(Problem):
         self._setup(knot, replicas, seed)
         self.excess_length = V.integer("excess_length", excess_length, V.MIN_EXCESS_LENGTH,
                                        V.MAX_EXCESS_LENGTH)
-        self.settings = AnnealSettings(moves=V.moves(moves), schedule=schedule or Schedule(),
-                                       params=params or MoveParams(),
+        self.coords = open_chain(self.knot_name, self.excess_length, seed=self.seed)
+        self.beads = len(self.coords)
+        self.settings = AnnealSettings(moves=V.moves(moves),
+                                       schedule=schedule or Schedule().for_beads(self.beads),
+                                       params=(params or MoveParams()).for_beads(self.beads),
                                        quench_fraction=quench_fraction,
                                        ensemble=Ensemble("extension"))
         self.settings.validate()
-        self.coords = open_chain(self.knot_name, self.excess_length, seed=self.seed)
-        self.beads = len(self.coords)
         self.settings.params.validate(self.beads)
         self.code = start_code(self.knot_name, self.coords, False, "open")
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)

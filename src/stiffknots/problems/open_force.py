@@ -154,7 +154,7 @@ class OpenForce(Problem):
                          "end_m_max": end_m_max}
         self.settings = AnnealSettings(
             moves=V.moves(moves), schedule=schedule or default_force_schedule(),
-            params=params or MoveParams(), quench_fraction=quench_fraction,
+            params=(params or MoveParams()).for_beads(self.beads), quench_fraction=quench_fraction,
             ensemble=Ensemble("force", force=self.force, **self.moves_kw))
         self.settings.validate()
         self.settings.params.validate(self.beads)

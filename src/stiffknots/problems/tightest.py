@@ -104,8 +104,10 @@ class Tightest(Problem):
             kw["d"] = d
         if w is not None and exclusion == "tube":
             kw["w"] = w
-        self.settings = AnnealSettings(moves=V.moves(moves), schedule=Schedule(),
-                                       params=MoveParams(**kw), plan="tight", powers=powers)
+        self.settings = AnnealSettings(moves=V.moves(moves),
+                                       schedule=Schedule().for_beads(self.beads),
+                                       params=MoveParams(**kw).for_beads(self.beads),
+                                       plan="tight", powers=powers)
         self.settings.validate()
         self.settings.params.validate(self.beads)
         self._closed_starts(start)
