@@ -39,6 +39,7 @@ def main(argv):
     same = opposite = amph = undecided = 0
     mirrored_words = []
     disagree = []
+    unsure = []
     for k in catalogue(max_c):
         if k.crossing_number < 3:
             continue
@@ -52,13 +53,16 @@ def main(argv):
             continue
         if r.chirality is None:
             amph += "amphi" in r.chirality_by
-            undecided += "amphi" not in r.chirality_by
+            if "amphi" not in r.chirality_by:
+                undecided += 1
+                unsure.append(f"{k.name} (stiffknots: {r.chirality_by})")
             continue
         if r.chirality == "-":
             mirrored_words.append(k.name)
         ts = topoly_sign(homfly_code(x), k.name)
         if ts is None:
             undecided += 1
+            unsure.append(f"{k.name} (topoly's name has no sign)")
         elif ts == r.chirality:
             same += 1
         else:
@@ -68,6 +72,7 @@ def main(argv):
           f"the opposite for {opposite}; amphichiral {amph}; undecided {undecided} "
           f"({time.time() - t0:.0f} s)")
     print("topoly's sign opposite to KnotInfo:", " ".join(disagree))
+    print("undecided:", "; ".join(unsure))
     print("braid word (as embedded) is the mirror of KnotInfo's PD:", " ".join(mirrored_words))
 
 
