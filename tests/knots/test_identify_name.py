@@ -90,21 +90,19 @@ def test_pd_code_orientation_and_writhe():
         assert pd_to_hfk(list(k.pd_code))["tau"] == int(k.raw["ozsvath_szabo_tau_invariant"])
 
 
-def test_unknot_composite_and_unknown():
+def test_unknot_and_the_composite_side_of_a_tie():
     from stiffknots.chain import regular_polygon
+    from stiffknots.knots.embedding import embed_braid
 
     assert identify_name(regular_polygon(20).coords) == ("0_1", ("0_1",), None)
-    # granny knot: two trefoils one after the other along z
-    t = np.array([[np.sin(u) + 2 * np.sin(2 * u), np.cos(u) - 2 * np.cos(2 * u), -np.sin(3 * u)]
-                  for u in np.linspace(0, 2 * np.pi, 60, endpoint=False)])
-    i = int(np.argmax(t[:, 0]))
-    t = np.roll(t, -i, axis=0)
-    a = np.vstack([t, t[:1] + [0.0, 0.0, 0.0]])
-    b = a + [0.0, 0.0, 6.0]
-    granny = np.vstack([a[:-1], [[a[0, 0] + 0.5, a[0, 1], 0.0]], b[:-1][::-1]])
-    name, cands, chir = identify_name(granny)
-    assert name is None or "#" in name
-    assert chir is None
+    # 4_1#5_2 (HOMFLY-PT: 4_1#5_2|9_12): the braid words of 4_1 and 5_2 side by side
+    a, b = get_knot("4_1"), get_knot("5_2")
+    word = list(a.braid_word) + [g + (a.braid_strands - 1) * (1 if g > 0 else -1)
+                                 for g in b.braid_word]
+    x = embed_braid(word, n_strands=a.braid_strands + b.braid_strands - 1, n_beads=150)
+    r = identify_details(x)
+    assert r.homfly == "4_1#5_2|9_12"
+    assert (r.name, r.candidates, r.chirality, r.volume) == ("4_1#5_2", ("4_1#5_2",), None, None)
 
 
 def _perturbed(knot, rng):
