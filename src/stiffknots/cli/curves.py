@@ -76,8 +76,9 @@ def identify(
     closed: ClosedOpt = None,
     json_: JsonOpt = False,
 ) -> None:
-    """Which knot is in a curve file: one name (ties of the HOMFLY-PT polynomial broken by the
-    knot complement), its chirality, the closure used, and ε of the polygon as given."""
+    """Which knot is in a curve file: one name, its chirality, the closure used, ε as given.
+
+    Ties of the HOMFLY-PT polynomial are broken by the knot complement (SnapPy)."""
     chain = _load(file, closed)
     d = _identify(chain)
     if json_:
