@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import typer
 
-from stiffknots.cli import anneal, catalogue, open, studies, tightest
+from stiffknots.cli import anneal, catalogue, curves, open, studies, tightest
 from stiffknots.cli.app import Interrupted, app, err
 from stiffknots.errors import InvalidParameter, UserInputError
 
@@ -14,6 +14,8 @@ for _name, _command in (
         ("knot", catalogue.knot),
         ("elastica", catalogue.elastica),
         ("families", catalogue.families),
+        ("identify", curves.identify),
+        ("resample", curves.resample),
         ("anneal", anneal.anneal),
         ("open", open.open_knot),
         ("tightest", tightest.tightest),

@@ -65,6 +65,10 @@ _FIELDS = (
     "alexander_polynomial",
     "jones_polynomial",
     "conway_notation",
+    # read by stiffknots.knots.exterior (naming, chirality): kept as KnotInfo text in Knot.raw
+    "volume",
+    "ozsvath_szabo_tau_invariant",
+    "symmetry_type",
 )
 
 #: Friendly names (keys: lower case, without spaces, '-' or '_').
