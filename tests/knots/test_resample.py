@@ -36,8 +36,16 @@ def test_too_few_beads_refused_with_the_smallest_that_works():
     nmin = minimal_resample_beads(c.coords)
     assert 20 < nmin < 150
     with pytest.raises(ResampleError, match=f">= {nmin}"):
-        resample(c, nmin - 5)
+        resample(c, 8)  # neither the sufficient condition nor the Δ-moves hold
     assert resample(c, nmin, check=False).n_beads == nmin
+    # below the condition's N, a resampling whose every Δ-move is certified is accepted, and
+    # the polynomial check (check=True) confirms the type
+    try:
+        r = resample(c, nmin - 5)
+    except ResampleError:
+        pass
+    else:
+        assert r.n_beads == nmin - 5 and r.meta["homfly"]
 
 
 def test_separation_distance_of_a_circle():

@@ -75,6 +75,10 @@ def anneal(
     checkpoint: CheckpointOpt = None,
     resume: ResumeOpt = False,
     start: StartOpt = "all",
+    from_file: Annotated[str | None, typer.Option(
+        "--from", help="Start every replica from the curve in this file (any format of "
+                       "`stiffknots identify`; resampled to --beads unit bonds, knot type "
+                       "checked); NAME is then checked against it.")] = None,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
@@ -103,9 +107,17 @@ def anneal(
     # every input is checked (and the folders claimed) before any work
     checkpoint = claim_checkpoint(checkpoint, resume)
     out_dir = prepare_out(out_dir, overwrite)
+    initial = None
+    if from_file is not None:
+        from stiffknots.formats import load
+
+        initial = load(from_file)
+        if not initial.closed:
+            raise UserError(f"--from {from_file}: the curve was read as open; anneal takes a "
+                            "closed curve (a knot)")
     problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
-                           resume=resume, start=start, rounds=rounds)
+                           resume=resume, start=start, rounds=rounds, initial=initial)
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
                          disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars)

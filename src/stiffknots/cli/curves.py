@@ -146,3 +146,67 @@ def resample(
         out.print(f"tube diameter w = {d['w']:.4g} bond lengths: "
                   + ("the chain is that thick" if d["tube_fits"] else
                      f"the chain is thinner ({d['thickness']:.4g}): relax it first"))
+
+
+def relax(
+    file: FileArg,
+    beads: Annotated[int, typer.Option(help="Number of beads N of the relaxed chain.")] = 150,
+    exclusion: Annotated[str, typer.Option(
+        help="bead (the paper's rule, d = 1/√2 bond) or tube (diameter w = (w/L)·N).")
+    ] = "bead",
+    w_over_l: Annotated[float | None, typer.Option(
+        "--w-over-L", help="Tube diameter over length (sets --exclusion tube).")] = None,
+    knot: Annotated[str | None, typer.Option(
+        help="The knot's name, when the invariants cannot tell (a HOMFLY-PT tie).")] = None,
+    moves: Annotated[int | None, typer.Option(
+        help="Monte Carlo moves per replica (default: 40 % of the annealing budget at N).")
+    ] = None,
+    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
+    seed: Annotated[int, typer.Option(help="Seed.")] = 0,
+    closed: ClosedOpt = None,
+    out_dir: Annotated[str | None, typer.Option("--out", help="Write the results here.")
+                       ] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an earlier run's "
+                                            "results in --out.")] = False,
+    json_: JsonOpt = False,
+) -> None:
+    """Relax a curve from a file (resampled to N unit bonds, type kept and checked) to the
+    nearest stiff-knot equilibrium; reports its ε before and after and its shape."""
+    from stiffknots.cli.anneal import save_results
+    from stiffknots.cli.app import (
+        ReplicaProgress,
+        check_interrupted,
+        finish,
+        prepare_out,
+        width_of,
+    )
+    from stiffknots.formats import closure_note
+    from stiffknots.problems.base import solve
+    from stiffknots.problems.relax import Relax
+
+    if w_over_l is not None:
+        exclusion = "tube"
+    chain = _load(file, closed)
+    problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
+                    w_over_L=w_over_l, knot=knot)
+    out_path = prepare_out(out_dir, overwrite)
+    with ReplicaProgress(f"relax {problem.knot_name}", replicas, disable=json_) as bars:
+        res = solve(problem, on_replica_done=bars.done, on_progress=bars)
+    check_interrupted(res)
+    width = width_of(problem.settings.params, beads)
+    d = res.to_dict() | {"file": str(file), "closure": closure_note(chain), "width": width}
+    if out_path is not None:
+        d["files"] = save_results(res, out_path, f"{res.knot}: ε = {res.epsilon:.3f} "
+                                  f"({width['text']})", "relax")
+    if json_:
+        dump(d)
+        finish(res, replicas)
+        return
+    out.print(f"{file}: {d['closure']}", markup=False, highlight=False)
+    out.print(f"{res.knot}: ε = {d['input_epsilon']:.4f} as given → {d['epsilon']:.4f} relaxed "
+              f"({d['shape']}, {width['text']}); "
+              + ("converged: " if res.converged else "NOT converged: ") + res.convergence,
+              markup=False, highlight=False)
+    if out_path is not None:
+        out.print(f"results in {out_path}/", markup=False, highlight=False)
+    finish(res, replicas)

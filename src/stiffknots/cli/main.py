@@ -16,6 +16,7 @@ for _name, _command in (
         ("families", catalogue.families),
         ("identify", curves.identify),
         ("resample", curves.resample),
+        ("relax", curves.relax),
         ("anneal", anneal.anneal),
         ("open", open.open_knot),
         ("tightest", tightest.tightest),

@@ -24,10 +24,12 @@ distance between "non-adjacent parts" of P at scale λ). Hence, if
 the balls of non-neighbouring arcs are disjoint and no triangle of one arc can meet another
 arc or its chord: only neighbouring arcs could interfere, which requires P to fold back within
 two chords. :func:`resample` computes D(2ℓ) (conservatively, from segment distances of a
-refinement of P) and refuses an ``N`` that violates the condition, naming the smallest ``N``
-that satisfies it. It then *certifies* the isotopy: every Δ-move is tested exactly (no
-triangle pierced by any other edge), and finally the HOMFLY-PT polynomial (chiral) of the
-result is compared with that of the input (``check=True``): it must be identical.
+refinement of P); when the condition fails it still accepts an ``N`` whose Δ-moves are all
+certified one by one (below: a proof of the isotopy by itself), and otherwise refuses it,
+naming the smallest ``N`` that satisfies the condition. It *certifies* the isotopy: every
+Δ-move is tested exactly (no triangle pierced by any other edge), and finally the HOMFLY-PT
+polynomial (chiral) of the result is compared with that of the input (``check=True``): it
+must be identical.
 
 Thickness: ``w_over_L`` gives the tube diameter of the stiff-knot model in bond units,
 ``w = (w/L) · N`` (L = N for unit bonds); the result records it with the chain's own
@@ -363,15 +365,29 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
     if w_over_L is not None and not (math.isfinite(w_over_L) and 0 <= w_over_L < 1):
         raise InvalidParameter("w_over_L", w_over_L, "a number in [0, 1)")
     x = _closed_coords(chain)
+    b = np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)
+    if len(x) == n and np.ptp(b) <= 1e-10 * b.mean():
+        # already N equal bonds (e.g. a chain of stiffknots in any unit): a uniform scaling
+        # is an isotopy, nothing to resample
+        out = Chain((x - x.mean(axis=0)) / b.mean(), True,
+                    dict(chain.meta) if isinstance(chain, Chain) else {})
+        out.meta.update({"resampled_from": n, "chord": float(b.mean()),
+                         "scale": float(1 / b.mean()), "thickness": out.min_segment_distance()})
+        if w_over_L is not None:
+            w = float(w_over_L) * n
+            out.meta.update({"w_over_L": float(w_over_L), "w": w,
+                             "tube_fits": bool(out.meta["thickness"] >= w)})
+        return out
     ok, a_max, D, (pts, ell, s, cum) = _condition(x, n)
-    if not ok:
+    if not ok and not (certify and _certify(x, cum, s, n)):
+        # the sufficient condition fails and the Δ-moves cannot be certified one by one
         need = minimal_resample_beads(x, start=n)
         raise ResampleError(
             "n_beads", n, f"an integer >= {need} for this curve",
             note=f"the arcs between beads ({a_max:.4g}) must be shorter than the distance "
                  f"between non-neighbouring parts of the curve ({D:.4g}) for the knot type to "
                  "be kept")
-    if certify and not _certify(x, cum, s, n):
+    if certify and ok and not _certify(x, cum, s, n):
         raise ResampleError(
             "n_beads", n, f"an integer > {n} for this curve",
             note="the isotopy to the chord polygon could not be certified (a neighbouring arc "

@@ -59,9 +59,16 @@ class ClosedAnneal(Problem):
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0,
                  start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
-                 agree: int = 2, rel_tol: float = 1e-3):
+                 agree: int = 2, rel_tol: float = 1e-3, initial=None):
         from stiffknots.theory.bounds import closed_bounds
 
+        if initial is not None:  # a curve of the user: named, resampled and checked first
+            from stiffknots.problems.relax import prepare_curve
+
+            ex = (params.exclusion if params is not None else "bead")
+            wl = params.w / beads if params is not None and ex == "tube" else None
+            x, knot, self.naming, p0 = prepare_curve(initial, beads, ex, wl, knot)
+            params = params or p0
         self._setup(knot, replicas, seed, beads)
         self._verdict_rule(rounds, agree, rel_tol)
         if resume and checkpoint_dir is None:
@@ -79,7 +86,14 @@ class ClosedAnneal(Problem):
                                        target_epsilon=target_epsilon)
         self.settings.validate()
         self.settings.params.validate(self.beads)
-        self._closed_starts(start)
+        if initial is None:
+            self._closed_starts(start)
+        else:
+            from stiffknots.problems.base import start_code
+
+            self.starts = ["file"]
+            self.chains = {"file": x.coords}
+            self.codes = {"file": start_code(self.knot_name, x.coords, True, "file")}
         self.checkpoint_dir = checkpoint_dir
         self.resume = resume
         self.checkpoint_seconds = checkpoint_seconds
@@ -126,6 +140,7 @@ def anneal(
     agree: int = 2,
     rel_tol: float = 1e-3,
     on_progress: Callable[[dict], None] | None = None,
+    initial=None,
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -164,6 +179,10 @@ def anneal(
         ``rounds`` rounds; ``rounds=1`` is a fixed budget. The result says ``converged`` and
         why (:func:`stiffknots.problems.base.verdict`).
     on_progress : receives progress records of the running replicas (moves done, best ε).
+    initial : a closed curve (:class:`~stiffknots.chain.Chain` of any bond lengths) to start
+        every replica from instead of the built-in embeddings: it is named (``knot`` is then
+        checked against it), resampled to ``beads`` unit bonds with its type kept and checked
+        (:func:`stiffknots.problems.relax.prepare_curve`).
 
     Returns
     -------
@@ -181,6 +200,6 @@ def anneal(
                            quench_fraction=quench_fraction, target_epsilon=target_epsilon,
                            checkpoint_dir=checkpoint_dir, resume=resume,
                            checkpoint_seconds=checkpoint_seconds, start=start, rounds=rounds,
-                           agree=agree, rel_tol=rel_tol)
+                           agree=agree, rel_tol=rel_tol, initial=initial)
     return solve(problem, workers=workers, on_replica_done=on_replica_done,
                  on_progress=on_progress)
