@@ -742,22 +742,34 @@ class _Problem:
         return sp.vstack(mats, format="csr")
 
     def rigid_rows(self, pos):
-        """No net translation and rotation (closed); no rotation about z (clamped open)."""
+        """Six sparse gauge rows that remove the rigid motions (closed chains): bead 0 does not
+        move, bead 1 moves only along b_0 = r_1 − r_0, and the bead farthest from that line
+        does not leave the plane it spans with it; E, the bonds and the exclusion rule are
+        invariant under rigid motions, so this fixes nothing physical. A clamped open chain
+        keeps one zero mode, the rotation about z: one free bead does not move azimuthally."""
         p = pos[self.free]
         if self.closed:
-            dense = np.zeros((6, 3 * self.nf))
-            for q in range(3):
-                dense[q, q::3] = 1.0
-            # (r × dx)_x = y dz − z dy, (r × dx)_y = z dx − x dz, (r × dx)_z = x dy − y dx
-            dense[3, 2::3], dense[3, 1::3] = p[:, 1], -p[:, 2]
-            dense[4, 0::3], dense[4, 2::3] = p[:, 2], -p[:, 0]
-            dense[5, 1::3], dense[5, 0::3] = p[:, 0], -p[:, 1]
+            e1 = p[1] - p[0]
+            e1 = e1 / np.linalg.norm(e1)
+            rel = p - p[0]
+            perp = rel - np.outer(rel @ e1, e1)
+            far = int(np.argmax(np.linalg.norm(perp, axis=1)))
+            nrm = np.cross(e1, perp[far])
+            nrm /= np.linalg.norm(nrm)
+            t2 = np.cross(nrm, e1)
+            beads = [0, 0, 0, 1, 1, far]
+            vecs = [np.eye(3)[0], np.eye(3)[1], np.eye(3)[2], nrm, t2, nrm]
         else:
-            dense = np.zeros((1, 3 * self.nf))
-            dense[0, 1::3], dense[0, 0::3] = p[:, 0], -p[:, 1]
-        return sp.csr_matrix(dense)
+            rho = np.hypot(p[:, 0], p[:, 1])
+            far = int(np.argmax(rho))
+            beads = [far]
+            vecs = [np.array([-p[far, 1], p[far, 0], 0.0]) / rho[far]]
+        rows = np.repeat(np.arange(len(beads)), 3)
+        cols = (3 * np.array(beads)[:, None] + np.arange(3)).ravel()
+        return sp.csr_matrix((np.concatenate(vecs), (rows, cols)),
+                             shape=(len(beads), 3 * self.nf))
 
-    def hessian(self, lam, cons, wts, mu):
+    def hessian(self, pos, lam, cons, wts, mu):
         """Hessian of the Lagrangian: an N_f × N_f scalar matrix ⊗ I₃.
 
         Squared-form pieces contribute −2 μ_p w wᵀ (exact at fixed closest-point parameters);
@@ -775,12 +787,14 @@ class _Problem:
         r += [k, k1, k, k1]
         c += [k, k1, k1, k]
         v += [-2 * lam, -2 * lam, 2 * lam, 2 * lam]
+        iso = np.zeros(0, dtype=bool)
         if len(cons):
             idx = cons.idx
             coef = np.where(cons.form == 0, -2.0 * mu, 0.0)
+            iso = (cons.ctype == 0) & (coef != 0)
             for s in range(4):
                 for t in range(4):
-                    ok = (idx[:, s] >= 0) & (idx[:, t] >= 0) & (coef != 0)
+                    ok = (idx[:, s] >= 0) & (idx[:, t] >= 0) & iso
                     r.append(idx[ok, s])
                     c.append(idx[ok, t])
                     v.append(coef[ok] * wts[ok, s] * wts[ok, t])
@@ -790,7 +804,57 @@ class _Problem:
         fr, fc = fm[r], fm[c]
         ok = (fr >= 0) & (fc >= 0)
         m = sp.coo_matrix((v[ok], (fr[ok], fc[ok])), shape=(self.nf, self.nf)).tocsr()
-        return sp.kron(m, sp.identity(3), format="csr")
+        h = sp.kron(m, sp.identity(3), format="csr")
+        aniso = np.flatnonzero((coef != 0) & ~iso) if len(cons) else []
+        if len(aniso):
+            h = h + self._sliding_blocks(pos, cons.sub(aniso), wts[aniso], coef[aniso])
+        return h
+
+    def _sliding_blocks(self, pos, cons, wts, coef):
+        """coef·w wᵀ ⊗ B for pieces whose closest points slide freely: B = I − ûûᵀ for a
+        vertex–segment piece (û along the segment), B = n̂n̂ᵀ for a segment–segment piece
+        (n̂ normal to both), the part of the squared distance that the sliding leaves."""
+        idx = cons.idx
+        m = len(idx)
+        bmat = np.empty((m, 3, 3))
+        eye = np.eye(3)
+        t1 = cons.ctype == 1
+        e = pos[idx[:, 2]] - pos[idx[:, 1]]
+        u = e / np.linalg.norm(e, axis=1)[:, None]
+        bmat[t1] = eye - u[t1, :, None] * u[t1, None, :]
+        t2 = ~t1
+        if np.any(t2):
+            ea = pos[idx[t2, 1]] - pos[idx[t2, 0]]
+            eb = pos[idx[t2, 3]] - pos[idx[t2, 2]]
+            nrm = np.cross(ea, eb)
+            ln = np.linalg.norm(nrm, axis=1)
+            nn = nrm / np.where(ln > 0, ln, 1.0)[:, None]
+            b2 = nn[:, :, None] * nn[:, None, :]
+            ua = ea / np.linalg.norm(ea, axis=1)[:, None]
+            b2[ln <= 1e-12] = eye - ua[ln <= 1e-12, :, None] * ua[ln <= 1e-12, None, :]
+            bmat[t2] = b2
+        rows, cols, vals = [], [], []
+        fm = self.fmap
+        for s in range(4):
+            for t in range(4):
+                ok = (idx[:, s] >= 0) & (idx[:, t] >= 0)
+                fs = np.where(ok, fm[np.maximum(idx[:, s], 0)], -1)
+                ft = np.where(ok, fm[np.maximum(idx[:, t], 0)], -1)
+                ok &= (fs >= 0) & (ft >= 0)
+                if not np.any(ok):
+                    continue
+                blk = (coef[ok] * wts[ok, s] * wts[ok, t])[:, None, None] * bmat[ok]
+                rr = 3 * fs[ok][:, None, None] + np.arange(3)[None, :, None]
+                cc = 3 * ft[ok][:, None, None] + np.arange(3)[None, None, :]
+                rows.append(np.broadcast_to(rr, blk.shape).ravel())
+                cols.append(np.broadcast_to(cc, blk.shape).ravel())
+                vals.append(blk.ravel())
+        n3 = 3 * self.nf
+        if not rows:
+            return sp.csr_matrix((n3, n3))
+        return sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows),
+                                                      np.concatenate(cols))),
+                             shape=(n3, n3)).tocsr()
 
 
 def _solve_kkt(h, a, rhs_top, rhs_bot, reg=0.0):
@@ -806,6 +870,20 @@ def _solve_kkt(h, a, rhs_top, rhs_bot, reg=0.0):
     if not np.all(np.isfinite(z)):
         return None
     return z[:n], z[n:]
+
+
+def _factor_kkt(h, a):
+    """Sparse LU of [h aᵀ; a 0] (with a tiny dual regularisation if it is singular)."""
+    for reg in (0.0, 1e-12, 1e-9):
+        lower = -reg * sp.identity(a.shape[0]) if reg > 0 else None
+        try:
+            lu = splu(sp.bmat([[h, a.T], [a, lower]], format="csc"))
+        except RuntimeError:
+            continue
+        test = lu.solve(np.ones(h.shape[0] + a.shape[0]))
+        if np.all(np.isfinite(test)):
+            return lu
+    return None
 
 
 def _solve_kkt_robust(h, a, rhs_top, rhs_bot):
@@ -917,17 +995,21 @@ class _Polisher:
         return None
 
     # ---- one SQP step --------------------------------------------------------------------
-    def qp_step(self, pos, g, lam, mu_of, sigma):
+    def qp_step(self, pos, g, lam, mu_of, sigma, margin):
         """Solve the QP by a primal active-set method (Nocedal & Wright, Alg. 16.3).
 
         Starts at dx = 0 (feasible: every piece has g ≥ 0 there) with the tight pieces as
-        working set, adds one blocking piece or drops the most negative multiplier per
-        iteration. Returns (dx (nf, 3), λ, μ (per candidate), working set, candidates,
-        predicted decrease, ∇E·dx, dxᵀ(H + σI)dx, clean) or None; ``clean`` is False when
-        the subproblem is not convex along the way or does not finish.
+        working set and adds one blocking piece or drops the most negative multiplier per
+        iteration; a direction of non-positive curvature is followed until a piece blocks
+        (inertia control). The base KKT matrix [H Aᵀ; A 0] (A: bonds and rigid rows) is
+        factorised once; working-set changes go through the dense Schur complement
+        S = J K⁻¹ Jᵀ over the candidate pieces. Returns (dx (nf, 3), λ, μ (per candidate),
+        working set, candidates, predicted decrease, ∇E·dx, dxᵀ(H + σI)dx, clean, direction
+        of non-positive curvature or None) or None; ``clean`` is False when the subproblem is
+        unbounded along such a direction or does not finish.
         """
         p = self.p
-        cons = p.candidates(pos, self.margin)
+        cons = p.candidates(pos, margin)
         dist, gval, wts, direc = cons.evaluate(pos)
         # the projection restores feasibility exactly, so the QP asks for a tangential step:
         # no bond correction, and pieces at (or within τ below) their target stay put
@@ -935,15 +1017,27 @@ class _Polisher:
         key = cons.key
         mu = np.array([mu_of.get(int(k), 0.0) for k in key]) if len(key) else np.zeros(0)
         _, b = p.bond_residual(pos)
-        h = p.hessian(lam, cons, wts, mu)
+        h = p.hessian(pos, lam, cons, wts, mu)
         if sigma > 0:
             h = h + sigma * sp.identity(h.shape[0])
         nb = len(p.bk)
         nm = len(key)
-        jall = p.jacobian(pos, b, cons.idx, wts, direc, rigid=False)[nb:] if nm else None
+        n = h.shape[0]
+        a0 = p.jacobian(pos, b, cons.idx[:0], wts[:0], direc[:0], rigid=True)
+        na = a0.shape[0]
+        lu = _factor_kkt(h, a0)
+        if lu is None:
+            return None
+        u0 = lu.solve(np.r_[-g, np.zeros(na)])
+        if nm:
+            jall = p.jacobian(pos, b, cons.idx, wts, direc, rigid=False)[nb:]
+            vmat = lu.solve(np.ascontiguousarray(
+                sp.hstack([jall, sp.csr_matrix((nm, na))]).T.toarray()))
+            smat = jall @ vmat[:n]  # S = J K⁻¹ Jᵀ (nm × nm)
+            ju0 = jall @ u0[:n]
         scale = np.where(cons.form == 0, 2.0 * cons.target, 1.0) if nm else np.zeros(0)
         work = gq <= 1e-12 * scale  # tight pieces (a distance within ~1e-12 of its target)
-        dx = np.zeros(h.shape[0])
+        dx = np.zeros(n)
         nu_b = np.zeros(nb)
         nu_c = np.zeros(nm)
         clean = True
@@ -951,12 +1045,20 @@ class _Polisher:
         ncdir = None
         for _ in range(4 * nm + 20):
             sel = np.flatnonzero(work)
-            a = p.jacobian(pos, b, cons.idx[sel], wts[sel], direc[sel], rigid=True)
-            out = _solve_kkt_robust(h, a, -(g + h @ dx), np.zeros(a.shape[0]))
-            if out is None:
-                return None
-            step, y = out
-            nu = -y
+            if sel.size:
+                ssub = smat[np.ix_(sel, sel)]
+                rhs = ju0[sel] + gq[sel]
+                try:
+                    y = np.linalg.solve(ssub, rhs)
+                    if not np.all(np.isfinite(y)):
+                        raise np.linalg.LinAlgError
+                except np.linalg.LinAlgError:  # dependent pieces: least squares
+                    y = np.linalg.lstsq(ssub, rhs, rcond=1e-12)[0]
+                z = u0 - vmat[:, sel] @ y
+            else:
+                y = np.zeros(0)
+                z = u0
+            step = z[:n] - dx
             if np.max(np.abs(step)) > 1e-14 * max(1.0, float(np.max(np.abs(dx)))):
                 hs = h @ step
                 cs = float(step @ hs)
@@ -989,9 +1091,9 @@ class _Polisher:
                     work[block] = True
                     continue
                 # full step: the multipliers of this working set are the QP's if all ≥ 0
-            nu_b = nu[:nb]
+            nu_b = -z[n:n + nb]
             nu_c = np.zeros(nm)
-            nu_c[sel] = nu[nb + p.nrigid:]
+            nu_c[sel] = -y
             if not sel.size:
                 break
             k = int(np.argmin(nu_c[sel]))
@@ -1039,6 +1141,8 @@ class _Polisher:
         sigma = 0.0
         it = 0
         nc_tries = 0
+        reset_at = -1
+        last_step = self.max_step
         reason = "max_iter reached"
         converged = False
         while True:
@@ -1048,7 +1152,8 @@ class _Polisher:
                 break
             if it >= max_iter:
                 break
-            out = self.qp_step(x, self.grad_free(x)[1], lam, mu_of, sigma)
+            margin = min(self.margin, 4.0 * last_step + 0.02)
+            out = self.qp_step(x, self.grad_free(x)[1], lam, mu_of, sigma, margin)
             if out is None:
                 reason = "KKT system could not be solved"
                 break
@@ -1056,6 +1161,13 @@ class _Polisher:
             rounding = 1e-13 * max(1.0, abs(e))
             log.debug("it %d E %.15g kkt %.3e sigma %.1e pred %.3e gd %.3e curv %.3e nact %d "
                       "clean %s", it, e, res, sigma, pred, gd, curv, int(np.sum(act)), clean)
+            if abs(pred) < rounding and abs(gd) < rounding and sigma > 1e-8 \
+                    and reset_at != it:
+                # below the resolution of E only because σ damps the step: look again with
+                # the exact model (once per iterate)
+                reset_at = it
+                sigma = 0.0
+                continue
             if clean and sigma <= 1e-8 and abs(pred) < rounding and abs(gd) < rounding:
                 # the exact model sees no decrease E can resolve: stationary to rounding
                 converged = res <= 1e-6 * gn
@@ -1064,7 +1176,7 @@ class _Polisher:
                           "above 1e-6·‖∇E‖")
                 break
             dmax = float(np.max(np.linalg.norm(dx, axis=1)))
-            if not clean or gd >= 0.0 or curv <= 0.0 or pred <= 0.0 or dmax > 1.0:
+            if not clean or pred <= 0.0 or (gd >= 0.0 and curv >= 0.0) or dmax > 1.0:
                 # negative curvature: first try to descend along it, else convexify (H + σI)
                 # and solve again
                 if ncdir is not None and nc_tries < 3:
@@ -1118,6 +1230,7 @@ class _Polisher:
                 reason = "line search failed"
                 break
             it += 1
+            last_step = max(alpha * dmax, 1e-3)
             x = y
             e = ey
             lam = nu_b
