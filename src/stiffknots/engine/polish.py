@@ -10,78 +10,98 @@ exclusion rule — ``bead`` (beads at index distance ≥ 2 at least ``d`` apart,
 or ``tube`` (segments that share no bead at least ``w`` apart, the tube of §II) — holds at
 every accepted iterate. Contacts are inequality constraints with multipliers μ ≥ 0: the contact
 forces of the variational analysis of §V.B. Open chains (§VIII) keep their clamped ends
-(beads 0, 1, N−2, N−1 by default) fixed, so the excess length L_e is unchanged.
+(beads 0, 1, N−2, N−1 by default) bit-for-bit, so the excess length L_e is unchanged.
+
+Constraint pieces
+-----------------
+Written with the raw bond vectors b_n = r_{n+1} − r_n, E = Σ (1 − b_n·b_{n+1}) equals E_d on
+the unit-bond manifold and is a quadratic form in the positions; the bonds are c_k = |b_k|² − 1
+= 0. Every exclusion constraint is a *piece*: the vector v = Σ_i w_i r_i between two closest
+points (barycentric weights on at most four beads) with g = |v|² − T² ≥ 0, T = limit + τ,
+τ = 10⁻¹³ (so the final margin is ≥ 0 in floating point). ``bead`` pieces are bead pairs. In
+the ``tube`` model the segment distance is split into vertex–vertex, vertex–segment and (both
+closest points interior) segment–segment pieces; their minimum is the segment distance, so
+they are equivalent to the rule, and strands in parallel contact get one smooth piece per
+touching vertex instead of one kinked one. The Hessians are exact: isotropic (⊗ I₃) for E,
+the bonds and vertex–vertex pieces, and 12 × 12 blocks (central differences of the analytic
+gradients of the point–line and line–line distances) for the others.
+
+The bead rule with d = 1/√2 lets two segments *touch* (crossing at right angles at their
+midpoints, all four beads exactly d apart; any other crossing brings a pair closer), and tight
+bead-model knots press strands into that configuration: the infimum is a non-embedded chain,
+and near it the four bead pairs and the crossing form a nearly flat, degenerate contact. With
+the guard on and a rule that does not separate strands by itself (``bead``, ``none``), segments
+that share no bead are therefore also kept ≥ ``min_gap`` apart (distance-form pieces g = D − T,
+whose multipliers are the forces that press the strands through each other); the energy then
+exceeds the touching limit by ≈ ``gap_force``·min_gap.
 
 Method: a feasible sequential quadratic programme (SQP)
 -------------------------------------------------------
-Written with the raw bond vectors b_n = r_{n+1} − r_n, E = Σ (1 − b_n·b_{n+1}) equals E_d on
-the unit-bond manifold and is a quadratic form in the positions; the bond constraints
-c_k = |b_k|² − 1 = 0 and the contact constraints g_p = |Σ_i w_i r_i|² − T² ≥ 0 are quadratic
-too (a contact p is the vector between two closest points, with barycentric weights w_i on at
-most four beads; T = limit + τ with τ = 10⁻¹³ so the final state keeps a margin ≥ 0 in
-floating point). Every term is isotropic (⊗ I₃), so the Hessian of the Lagrangian
-L = E − Σ λ_k c_k − Σ μ_p g_p is a sparse N × N matrix times I₃. One iteration:
+One iteration, from an admissible x:
 
-1. *Candidates*: every exclusion constraint within ``limit + 2·max_step + 0.05`` (an O(N²)
-   numba scan). In the tube model the segment–segment distance is split into pieces that are
-   smooth where it matters: vertex–vertex, vertex–segment and (when both closest points are
-   interior) segment–segment closest pairs; their minimum is the segment distance, so the
-   pieces are equivalent to the tube rule, and near-parallel strands in contact get one
-   constraint per touching vertex instead of a single kinked one.
-2. *QP step*: minimise ∇E·dx + ½ dxᵀ(∇²L + σI)dx subject to the linearised bonds (= 0),
-   the linearised contacts (≥ 0) and six rigid-body rows (no net translation or rotation; one
-   row, rotation about z, for a clamped open chain). The inequalities are solved by a
-   primal–dual active-set loop, warm-started from the previous iteration; each equality QP is
-   one sparse LU solve of the KKT matrix [H Aᵀ; A 0] (``scipy.sparse.linalg.splu``). σ ≥ 0
-   is raised only if the step is not a descent direction (negative curvature).
-3. *Exact projection*: the trial point x + α·dx is projected back onto the bonds and the
-   active (or violated) contacts by Gauss–Newton min-norm corrections, to 10⁻¹⁴.
-4. *Acceptance*: the trial is accepted only if the exclusion rule holds on *all* pairs (an
-   O(N²) check, independent of the candidate list), the energy does not increase (Armijo
-   decrease where it is resolvable in floating point), and the passage guard below holds;
-   otherwise α is halved.
+1. *Candidates*: every piece within a margin of its limit (an O(N²) numba scan; the margin
+   follows the recent step length, at most 2·max_step + 0.05).
+2. *QP*: minimise ∇E·dx + ½ dxᵀ(∇²L + σI)dx, L = E − Σ λ_k c_k − Σ μ_p g_p, subject to the
+   linearised bonds (= 0), pieces (≥ 0) and six sparse gauge rows that remove the rigid
+   motions (one, rotation about z, for a clamped open chain). A primal active-set method
+   (Nocedal & Wright, Alg. 16.3) starts from dx = 0 with the tight pieces, adds one blocking
+   piece or drops the most negative multiplier at a time, and follows directions of
+   non-positive curvature until a piece blocks (inertia control). The base KKT matrix
+   [H Aᵀ; A 0] is factorised once (sparse LU); working-set changes go through a bordered
+   inverse of the Schur complement J_W K⁻¹ J_Wᵀ. σ ≥ 0 is raised only when the subproblem
+   is unbounded; an unbounded direction is first tried as a negative-curvature step.
+3. *Projection*: the trial x + α·dx goes back onto the bonds (to ~10⁻¹³) and the violated
+   pieces (to their target) by min-norm Gauss–Newton corrections (chord iterations).
+4. *Acceptance*: the exclusion rule on *all* pairs (an O(N²) check, independent of the
+   candidates), the strand gap, no energy increase (Armijo where resolvable in floating
+   point) and the passage guard below; otherwise α is halved.
 
-Convergence is measured by the KKT residual at the current point: with A the Jacobian of the
-bond constraints and of the active contacts (those within 10⁻⁸ of their limit), restricted to
-the free beads,
+Convergence is measured by the KKT residual: with A the Jacobian of the bonds and of the
+pieces within 10⁻⁸ of their limit, restricted to the free beads,
 
     kkt_residual = min_{λ, μ ≥ 0} ‖∇E − Aᵀ(λ, μ)‖₂,
 
-the norm of the part of the energy gradient that no admissible combination of bond tensions
-and (pushing, μ ≥ 0) contact forces balances; it is zero exactly at a KKT point (for an
-interior point of the exclusion rule it is the norm of the gradient projected on the tangent
-space of the bond manifold). The run has converged when kkt_residual ≤ tol·‖∇E‖₂, or when the
-model decrease of the next step is below the floating-point resolution of E.
+the part of the energy gradient that no combination of bond tensions and pushing contact
+forces balances; it vanishes exactly at a KKT point (away from contacts it is the gradient
+projected on the tangent space of the bond manifold). The run has converged when
+kkt_residual ≤ tol·‖∇E‖₂, or when the exact model predicts no decrease that E can resolve
+(|ΔE| < 10⁻¹³·E) and kkt_residual ≤ 10⁻⁶·‖∇E‖₂.
 
 No strand passage (proof)
 -------------------------
 Every accepted step x → x' is realised by the straight-line motion r_i(t) = r_i + t(r'_i −
-r_i), t ∈ [0, 1], of every bead. A point of segment a (beads a, a+1) at parameter s is
-(1−s) r_a(t) + s r_{a+1}(t), so it moves with speed |(1−s)Δr_a + sΔr_{a+1}| ≤ δ_a :=
-max(|Δr_a|, |Δr_{a+1}|). Hence the distance D_ab(t) between two segments is Lipschitz with
-constant δ_a + δ_b, and D_ab(t) ≥ max(D_ab(0) − (δ_a+δ_b)t, D_ab(1) − (δ_a+δ_b)(1 − t)) ≥
-(D_ab(0) + D_ab(1) − δ_a − δ_b)/2. A step is accepted only if
+r_i), t ∈ [0, 1], of every bead. For segments a = (a, a+1) and b = (b, b+1) and points at
+parameters s and u on them, p_a − p_b moves with velocity (1−s)Δr_a + sΔr_{a+1} −
+(1−u)Δr_b − uΔr_{b+1}, a convex combination of the four differences Δr_i − Δr_j (i ∈ a,
+j ∈ b); so every |p_a − p_b| is L-Lipschitz in t with L = max |Δr_i − Δr_j| ≤ δ_a + δ_b
+(δ = the larger displacement of a segment's two beads: a point of a segment moves at most as
+fast as the faster of its ends), and so is their minimum, the segment distance D(t). On any
+interval [t₀, t₁], D(t) ≥ (D(t₀) + D(t₁) − L(t₁ − t₀))/2. A step is accepted only if, for
+every pair of segments that share no bead,
 
-    D_ab(0) + D_ab(1) > δ_a + δ_b     for every pair of segments that share no bead,
+    D(0) + D(1) − L > 2η,                                     η = 10⁻⁹ (``GUARD_FLOOR``),
 
-so no two such segments meet at any time t. Two segments that share bead k could only
-intersect elsewhere by folding back (collinear and overlapping), i.e. if the far end of one
-lay on the other: the step also requires dist(r_{k+1}, [r_{k−1}, r_k]) at both ends to sum to
-more than |Δr_{k+1}| + max(|Δr_{k−1}|, |Δr_k|), and symmetrically for r_{k−1} against
-[r_k, r_{k+1}] (both exclusion rules keep these distances positive at every admissible
-state). So the polygon stays embedded along the whole motion — an isotopy — and its knot type
-cannot change; this is the Lipschitz argument of :mod:`stiffknots.engine.kernel` applied to a
-straight-line instead of a rotational motion. For an open chain the knot type is that of the
-closure along the z-axis rays beyond the clamped end segments; each free bead must end
-strictly inside the slab z_0 < z < z_{N−1}, and z is linear in t, so the whole path stays in
-the slab and no segment ever touches a ray. Only pairs with D_ab(1) ≤ δ_a + δ_b can fail; a
-screen on segment midpoints skips the rest, so the guard costs one O(N²) pass of cheap tests.
+or, failing that, the same inequality holds on every sub-interval of a bisection of [0, 1]
+(at most 2^guard_depth pieces; D computed at the new nodes). Then D(t) > η > 0 for all t:
+no two such segments meet at any time. (The floor η makes the certificate immune to
+rounding: at a true crossing the computed D can be 10⁻¹⁷ rather than 0.) Two segments that
+share bead k could only meet elsewhere by folding back (collinear and overlapping), i.e. with
+the far end of one on the other: the same certificate is required for r_{k+1} against
+[r_{k−1}, r_k] and for r_{k−1} against [r_k, r_{k+1}] (both rules keep these distances
+positive at every admissible state). So the polygon stays embedded along the whole motion — an
+isotopy — and its knot type cannot change; this is the Lipschitz argument of
+:mod:`stiffknots.engine.kernel` applied to straight-line motions (with the relative
+displacement, and on sub-intervals). For an open chain the knot type is that of the closure
+along the z-axis rays beyond the clamped end segments: each free bead must end strictly inside
+the slab z_0 < z < z_{N−1}, and z is linear in t, so the whole path stays in the slab and no
+segment touches a ray. Pairs with D(1) > δ_a + δ_b + η are skipped by a screen on segment
+midpoints, so the guard is one O(N²) pass of cheap tests plus a few bisections.
 
 With ``exclusion="none"`` the chain may self-intersect (e.g. an m-covered circle), so the guard
 is off by default there (``guard=None``); pass ``guard=True`` to keep it.
 
-Functions here see arrays and numbers only inside the ``@njit`` kernels; :func:`polish`
-validates its inputs and composes them.
+The ``@njit`` kernels see arrays and numbers only; :func:`polish` validates its inputs and
+composes them with scipy's sparse LU.
 """
 
 from __future__ import annotations
@@ -684,7 +704,7 @@ class PolishResult:
     grad_norm : ‖∇E‖₂ over the free beads (the scale of ``kkt_residual``).
     iterations : accepted SQP steps.
     converged : kkt_residual ≤ tol·grad_norm, or no step can lower E by more than its
-        floating-point resolution.
+        floating-point resolution and kkt_residual ≤ 10⁻⁶·grad_norm.
     reason : why the iteration stopped.
     n_active : exclusion constraints within 10⁻⁸ of their limit at the end (bead pairs; in
         the tube model vertex–vertex, vertex–segment and segment–segment contact pieces).
@@ -1492,7 +1512,8 @@ def polish(
     d, w : exclusion distances (bond lengths).
     clamp_ends : open chains: beads held fixed at each end (default 2, the end segments).
     max_iter : largest number of accepted steps.
-    tol : converged when the KKT residual is ≤ tol·‖∇E‖₂.
+    tol : converged when the KKT residual is ≤ tol·‖∇E‖₂ (or, once no decrease of E is
+        resolvable in floating point, ≤ 10⁻⁶·‖∇E‖₂; see the module docstring).
     max_step : largest displacement of any bead in one step (bond lengths).
     guard : strand-passage guard (default: on for ``bead`` and ``tube``, off for ``none``).
     min_gap : with the guard on and a rule that does not keep strands apart by itself
