@@ -970,26 +970,32 @@ def _solve_kkt(h, a, rhs_top, rhs_bot, reg=0.0):
 
 
 class _SchurInverse:
-    """The inverse of S_WW = J_W K⁻¹ J_Wᵀ for a working set W that changes by one piece at
-    a time: bordering updates (O(|W|²)) on additions and removals, a fresh inverse every 64
-    changes or when an update is ill-conditioned (dependent pieces: pseudo-inverse)."""
+    """The inverse of S_WW = J_W K⁻¹ J_Wᵀ for a working set W that changes a few pieces at a
+    time: bordering updates (O(|W|²)) on additions and removals, a fresh inverse every 64
+    changes. If S_WW is numerically singular (dependent pieces: several contacts holding the
+    same motion), S_WW + εI with ε = 10⁻¹²·max|S_ii| is inverted instead: it lets the
+    linearised pieces move by ε·μ, which the projection removes."""
 
     def __init__(self):
         self.order = np.zeros(0, dtype=np.int64)
         self.inv = np.zeros((0, 0))
         self.changes = 0
+        self.eps = 0.0
 
     def _fresh(self, sel, block):
         smat = block(sel, sel)
         self.order = sel
         self.changes = 0
+        self.eps = 0.0
+        eye = np.eye(len(sel))
         try:
             self.inv = np.linalg.inv(smat)
-            resid = np.abs(self.inv @ smat - np.eye(len(sel))).max() if len(sel) else 0.0
-            if not resid < 1e-6:
-                raise np.linalg.LinAlgError
+            ok = np.abs(self.inv @ smat - eye).max() < 1e-6 if len(sel) else True
         except np.linalg.LinAlgError:
-            self.inv = np.linalg.pinv(smat, rcond=1e-12)
+            ok = False
+        if not ok:  # dependent pieces: a tiny shift
+            self.eps = 1e-12 * max(float(np.max(np.abs(np.diag(smat)))), 1e-300)
+            self.inv = np.linalg.inv(smat + self.eps * eye)
         return sel
 
     def sync(self, sel, block):
@@ -998,7 +1004,7 @@ class _SchurInverse:
         cur = self.order
         added = np.setdiff1d(sel, cur)
         removed = np.setdiff1d(cur, sel)
-        if self.changes + added.size + removed.size > 64 or added.size + removed.size > 2 \
+        if self.changes + added.size + removed.size > 64 or added.size + removed.size > 16 \
                 or not cur.size:
             return self._fresh(sel, block)
         inv = self.inv
@@ -1012,7 +1018,7 @@ class _SchurInverse:
             cur = cur[keep]
         for a in added:
             sv = block(cur, np.array([a]))[:, 0]
-            c = float(block(np.array([a]), np.array([a]))[0, 0])
+            c = float(block(np.array([a]), np.array([a]))[0, 0]) + self.eps
             isv = inv @ sv
             gam = c - float(sv @ isv)
             if abs(gam) <= 1e-12 * max(abs(c), 1e-300):
@@ -1201,7 +1207,7 @@ class _Polisher:
             jall = p.jacobian(pos, b, cons.idx, wts, direc, rigid=False)[nb:]
             jall_t = jall.T.tocsc()
             ju0 = jall @ u0[:n]
-            vcols = np.zeros((n + na, nm))  # columns K⁻¹ [J_pᵀ; 0], computed on demand
+            vcols = np.zeros((n + na, nm), order="F")  # K⁻¹ [J_pᵀ; 0], on demand
             have = np.zeros(nm, dtype=bool)
         scale = np.where(cons.form == 0, 2.0 * cons.target, 1.0) if nm else np.zeros(0)
         work = gq <= 1e-12 * scale  # tight pieces (a distance within ~1e-12 of its target)
@@ -1242,7 +1248,7 @@ class _Polisher:
                         step = -step
                     smax = float(np.max(np.linalg.norm(step.reshape(-1, 3), axis=1)))
                     alpha = 1.0 / smax if smax > 0 else 0.0  # at most one bond length
-                block = -1
+                block = np.zeros(0, dtype=np.int64)
                 if nm:
                     js = jall @ step
                     cand = np.flatnonzero(~work & (js < 0.0))
@@ -1251,15 +1257,16 @@ class _Polisher:
                         k = int(np.argmin(ratios))
                         if ratios[k] < alpha:
                             alpha = float(ratios[k])
-                            block = int(cand[k])
-                if not cs > 0.0 and block < 0:
+                            # every piece that blocks at the same length (symmetric starts)
+                            block = cand[ratios <= alpha * (1.0 + 1e-9) + 1e-300]
+                if not cs > 0.0 and np.size(block) == 0:
                     clean = False
                     ncdir = step.reshape(-1, 3)
                     break
                 dx = dx + alpha * step
                 if nm:
                     lin = gq + jall @ dx
-                if block >= 0:
+                if block.size:
                     work[block] = True
                     continue
                 # full step: the multipliers of this working set are the QP's if all ≥ 0
@@ -1355,7 +1362,7 @@ class _Polisher:
                           "above 1e-6·‖∇E‖")
                 break
             dmax = float(np.max(np.linalg.norm(dx, axis=1)))
-            if not clean or pred <= 0.0 or (gd >= 0.0 and curv >= 0.0) or dmax > 1.0:
+            if not clean or pred <= 0.0 or gd >= 0.0 or dmax > 1.0:
                 # negative curvature: first try to descend along it, else convexify (H + σI)
                 # and solve again
                 if ncdir is not None and nc_tries < 3:
@@ -1371,7 +1378,9 @@ class _Polisher:
                         continue
                 sigma = max(10.0 * sigma, 1e-6)
                 if sigma > 1e6:
-                    reason = "no descent direction"
+                    converged = res <= 1e-6 * gn
+                    reason = ("no descent direction left (KKT residual ≤ 1e-6·‖∇E‖)"
+                              if converged else "no descent direction found")
                     break
                 continue
             nc_tries = 0
@@ -1401,7 +1410,7 @@ class _Polisher:
             log.debug("  alpha %.3e dmax %.3e accepted %s fails (projection, admissibility, "
                       "energy) %s", alpha, dmax, accepted, fails)
             if not accepted:
-                if sigma <= 1e-8 and (-gd < rounding or pred < rounding):
+                if sigma <= 1e-8 and abs(gd) < rounding and abs(pred) < rounding:
                     converged = res <= 1e-6 * gn
                     reason = ("stationary to rounding (model decrease below the resolution of "
                               "E)" if converged else "stalled: line search failed")
