@@ -49,14 +49,15 @@ def test_an_easy_knot_converges_in_one_round():
 
 
 def test_a_budget_too_small_cannot_converge():
-    # 4_1 after 100,000 moves: every replica stops in a different state; two more rounds
-    # add replicas (new seeds, round-robin starts) and the verdict says why it is not done
-    res = anneal("4_1", moves=100_000, replicas=2, seed=0, rounds=2, workers=1)
+    # 7_4 after 100,000 moves: every replica (polished to its local minimum) stops in a
+    # different state; a second round adds replicas (new seeds, round-robin starts) and the
+    # verdict says why it is not done
+    res = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=2)
     assert not res.converged and res.rounds == 2 and len(res.replicas) == 4
     assert "after 2 rounds (the budget)" in res.convergence
     assert sorted(r.replica for r in res.replicas) == [0, 1, 2, 3]
     assert len({r.seed for r in res.replicas}) == 4
-    fixed = anneal("4_1", moves=100_000, replicas=2, seed=0, rounds=1, workers=1)
+    fixed = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=1)
     # the first round of an adaptive run is the fixed-budget run, replica for replica
     by_id = {r.replica: r for r in res.replicas}
     for r in fixed.replicas:

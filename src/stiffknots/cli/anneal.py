@@ -15,6 +15,7 @@ from stiffknots.cli.app import (
     JsonOpt,
     OutOpt,
     OverwriteOpt,
+    PolishOpt,
     ReplicaProgress,
     ReplicasOpt,
     ResumeOpt,
@@ -75,6 +76,7 @@ def anneal(
     checkpoint: CheckpointOpt = None,
     resume: ResumeOpt = False,
     start: StartOpt = "all",
+    polish: PolishOpt = True,
     from_file: Annotated[str | None, typer.Option(
         "--from", help="Start every replica from the curve in this file (any format of "
                        "`stiffknots identify`; resampled to --beads unit bonds, knot type "
@@ -117,7 +119,8 @@ def anneal(
                             "closed curve (a knot)")
     problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
-                           resume=resume, start=start, rounds=rounds, initial=initial)
+                           resume=resume, start=start, rounds=rounds, initial=initial,
+                           polish=polish)
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
                          disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars)

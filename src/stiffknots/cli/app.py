@@ -45,6 +45,9 @@ StartOpt = Annotated[str, typer.Option(
          "rational knot [ab]: 4_1, 5_2, 6_1, ...) or eighty (an 8 plus a circle).")]
 CheckpointOpt = Annotated[str | None, typer.Option(
     "--checkpoint", help="Write a checkpoint of every replica to this folder.")]
+PolishOpt = Annotated[bool, typer.Option(
+    "--polish/--no-polish", help="Take every replica's best chain to its local minimum with "
+                                 "the final minimiser (unit bonds and exclusion held exactly).")]
 ResumeOpt = Annotated[bool, typer.Option(
     "--resume", help="Continue from the checkpoints in --checkpoint (same arguments).")]
 

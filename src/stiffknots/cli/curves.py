@@ -164,6 +164,9 @@ def relax(
     replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
     seed: Annotated[int, typer.Option(help="Seed.")] = 0,
     closed: ClosedOpt = None,
+    polish: Annotated[bool, typer.Option(
+        "--polish/--no-polish", help="Finish with the final minimiser (local minimum).")
+    ] = True,
     out_dir: Annotated[str | None, typer.Option("--out", help="Write the results here.")
                        ] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an earlier run's "
@@ -188,7 +191,7 @@ def relax(
         exclusion = "tube"
     chain = _load(file, closed)
     problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
-                    w_over_L=w_over_l, knot=knot)
+                    w_over_L=w_over_l, knot=knot, polish=polish)
     out_path = prepare_out(out_dir, overwrite)
     with ReplicaProgress(f"relax {problem.knot_name}", replicas, disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars)

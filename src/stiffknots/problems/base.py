@@ -14,6 +14,13 @@ Verification, in one place, of every replica:
 * the engine's own checks (:func:`~stiffknots.engine.driver.make_result`): the energy
   recomputed from scratch equals the incremental one, bonds are unit (1e-10), open chains stay
   clamped, the exclusion rule holds;
+* the final minimiser (:func:`~stiffknots.engine.polish.polish`, on by default): the Monte
+  Carlo's best chain is taken to the local minimum of E_d with unit bonds and the exclusion
+  rule held exactly and no strand passage on the way (its own proof and guard); the replica's
+  numbers are those of the polished chain, and ``polish`` records the energy before, the KKT
+  residual, the iterations and whether it converged (not applied where the energy is not the
+  paper's E_d — the restricted-curvature plan — or where the ends move: the fixed-force
+  ensemble);
 * the knot type. Every starting chain is checked before any work: its HOMFLY-PT polynomial
   (:func:`~stiffknots.knots.identify.homfly_code`, chiral; an open chain is closed along its z
   axis first) must be the requested knot's in topoly's table, or — for a knot beyond the table
@@ -62,6 +69,7 @@ class Replica(ReplicaResult):
         identifies.
     knot_verified : True when the final chain has the HOMFLY-PT polynomial of its start.
     knot_check : how the type was confirmed (module docstring).
+    polish : what the final minimiser did (module docstring; None if it was not applied).
     start : the starting embedding (``braid``, ``cage``, ``eighty``, ``open``).
     observables : problem-specific numbers (e.g. ``length_over_R`` of §IX D), also
         readable as attributes (``r.length_over_R``).
@@ -72,6 +80,7 @@ class Replica(ReplicaResult):
     start: str | None = None
     observables: dict = field(default_factory=dict)
     knot_check: str | None = None
+    polish: dict | None = None
 
     def __getattr__(self, name: str):
         # the problem's observables read as attributes (``r.length_over_R``)
@@ -92,9 +101,19 @@ class Job:
     knot: str
     start: str = "braid"
     start_code: str = ""  # HOMFLY-PT polynomial of the starting chain (topoly's code)
+    polish: bool = True  # run the final minimiser on the best chain
     checkpoint: Path | None = None
     resume: bool = False
     checkpoint_seconds: float | None = None
+
+
+DEFAULT_MOVES = AnnealSettings.moves  # 30 M at N = 150: relaxation + annealing (schedules.py)
+
+
+def default_moves(n_beads: int) -> int:
+    """The default budget of a replica of N beads: 30 M moves at N = 150, × (N/150)² (the
+    temperatures scale as 1/N², :meth:`Schedule.for_beads`; the moves per bead as N)."""
+    return max(1_000_000, round(DEFAULT_MOVES * (int(n_beads) / 150) ** 2))
 
 
 def observe_shape(r: Replica, params) -> None:
@@ -152,13 +171,63 @@ def run_job(job: Job) -> Replica:
         raw = run_tempering(job.coords, job.settings, job.seed, job.replica, **kw)
     else:
         raw = run_replica(job.coords, job.settings, job.seed, job.replica, progress=report, **kw)
-    code = knot_code(raw.coords, job.settings.closed)
+    fields, info = polish_run(vars(raw), job.settings) if job.polish else (vars(raw), None)
+    code = knot_code(fields["coords"], job.settings.closed)
     ok = code == job.start_code
     found = job.knot if ok else identify_code(code)
     check = "HOMFLY-PT polynomial unchanged from the starting chain" if ok else (
         "HOMFLY-PT polynomial differs from the starting chain's")
-    return Replica(**vars(raw), knot=found, knot_verified=ok, start=job.start,
-                   knot_check=check)
+    return Replica(**fields, knot=found, knot_verified=ok, start=job.start,
+                   knot_check=check, polish=info)
+
+
+def polishable(settings: AnnealSettings) -> bool:
+    """Does the final minimiser apply? (the paper's energy E_d, ends that do not move)"""
+    return (settings.plan == "anneal" and settings.params.energy == "bending"
+            and settings.ensemble.kind in ("closed", "extension"))
+
+
+def polish_run(fields: dict, settings: AnnealSettings) -> tuple[dict, dict | None]:
+    """The numbers of a run after the final minimiser (:func:`stiffknots.engine.polish.polish`)
+    took its best chain to the local minimum; and what the minimiser did.
+
+    Every number that depends on the chain is recomputed from the polished coordinates (the
+    energy from scratch), so the verification that follows applies to the polished chain.
+    """
+    from stiffknots.engine.polish import polish
+    from stiffknots.engine.prims import (
+        check_state,
+        energy_chain,
+        min_nonadjacent_segment_distance,
+        turning_cosines,
+    )
+
+    if not polishable(settings):
+        return fields, None
+    p = settings.params
+    closed = settings.closed
+    res = polish(fields["coords"], closed=closed, exclusion=p.exclusion, d=p.d, w=p.w)
+    x = res.pos
+    e = float(energy_chain(x, not closed))
+    n = len(x)
+    le = float(n - 1 - (x[-1, 2] - x[0, 2])) if not closed else None
+    out = dict(fields)
+    bonds = (np.roll(x, -1, axis=0) - x) if closed else np.diff(x, axis=0)
+    mode = 0 if p.exclusion == "bead" else 1
+    out.update(
+        coords=x, energy=e, energy_recomputed=e, epsilon=e * (n if closed else le),
+        max_bond_error=float(np.max(np.abs(np.linalg.norm(bonds, axis=1) - 1.0))),
+        exclusion_margin=-float(check_state(x, mode, p.d, p.w, not closed)),
+        min_segment_distance=float(min_nonadjacent_segment_distance(x, not closed)),
+        max_turn=float(np.max(np.arccos(np.clip(turning_cosines(x, not closed), -1, 1)))))
+    if not closed:
+        out["total_energy"] = e
+    info = {"epsilon_before": fields["epsilon"], "energy_before": res.energy_before,
+            "kkt_residual": res.kkt_residual, "relative_kkt": res.relative_kkt,
+            "iterations": res.iterations, "converged": res.converged, "reason": res.reason,
+            "n_active": res.n_active, "strand_gap": res.strand_gap,
+            "gap_force": res.gap_force, "seconds": res.seconds}
+    return out, info
 
 
 @dataclass
@@ -305,6 +374,9 @@ class Problem:
         self.codes = {st: start_code(self.knot_name, x, True, st)
                       for st, x in self.chains.items()}
 
+    #: run the final minimiser on every replica's best chain
+    polish: bool = True
+
     def _replica_jobs(self, settings: AnnealSettings, coords: Callable[[int], np.ndarray],
                       start: Callable[[int], str], code: Callable[[int], str],
                       checkpoint_dir=None, resume: bool = False,
@@ -314,6 +386,7 @@ class Problem:
         seeds = replica_seeds(self.seed, first + self.replicas)
         return [Job(replica=r, seed=seeds[r], coords=coords(r), settings=settings,
                     knot=self.knot_name, start=start(r), start_code=code(r),
+                    polish=self.polish,
                     checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
                                 if checkpoint_dir is not None else None),
                     resume=resume, checkpoint_seconds=checkpoint_seconds)

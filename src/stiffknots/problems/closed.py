@@ -19,15 +19,16 @@ from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter
 from stiffknots.problems import validate as V
-from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, observe_shape, solve
+from stiffknots.problems.base import (
+    Job,
+    Problem,
+    Replica,
+    ReplicaSet,
+    default_moves,
+    observe_shape,
+    solve,
+)
 
-DEFAULT_MOVES = AnnealSettings.moves  # 30 M at N = 150: relaxation + annealing (schedules.py)
-
-
-def default_moves(n_beads: int) -> int:
-    """The default budget of a replica of N beads: 30 M moves at N = 150, × (N/150)² (the
-    temperatures scale as 1/N², :meth:`Schedule.for_beads`; the moves per bead as N)."""
-    return max(1_000_000, round(DEFAULT_MOVES * (int(n_beads) / 150) ** 2))
 DEFAULT_ROUNDS = 4  # rounds of replicas until the lowest state is reached twice
 
 
@@ -59,7 +60,7 @@ class ClosedAnneal(Problem):
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0,
                  start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
-                 agree: int = 2, rel_tol: float = 1e-3, initial=None):
+                 agree: int = 2, rel_tol: float = 1e-3, initial=None, polish: bool = True):
         from stiffknots.theory.bounds import closed_bounds
 
         if initial is not None:  # a curve of the user: named, resampled and checked first
@@ -71,6 +72,7 @@ class ClosedAnneal(Problem):
             params = params or p0
         self._setup(knot, replicas, seed, beads)
         self._verdict_rule(rounds, agree, rel_tol)
+        self.polish = bool(polish)
         if resume and checkpoint_dir is None:
             raise InvalidParameter("checkpoint_dir", None, "given when resume=True",
                                    "the folder of the checkpoints")
@@ -116,7 +118,7 @@ class ClosedAnneal(Problem):
         return {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
 
     def settings_dict(self) -> dict:
-        return {**self.settings.as_dict(), "start": self.starts}
+        return {**self.settings.as_dict(), "start": self.starts, "polish": self.polish}
 
 
 def anneal(
@@ -141,6 +143,7 @@ def anneal(
     rel_tol: float = 1e-3,
     on_progress: Callable[[dict], None] | None = None,
     initial=None,
+    polish: bool = True,
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -183,6 +186,9 @@ def anneal(
         every replica from instead of the built-in embeddings: it is named (``knot`` is then
         checked against it), resampled to ``beads`` unit bonds with its type kept and checked
         (:func:`stiffknots.problems.relax.prepare_curve`).
+    polish : take every replica's best chain to its local minimum with the final minimiser
+        (:func:`stiffknots.engine.polish.polish`; unit bonds and exclusion held exactly, no
+        strand passage); its report is in each replica's ``polish``.
 
     Returns
     -------
@@ -200,6 +206,6 @@ def anneal(
                            quench_fraction=quench_fraction, target_epsilon=target_epsilon,
                            checkpoint_dir=checkpoint_dir, resume=resume,
                            checkpoint_seconds=checkpoint_seconds, start=start, rounds=rounds,
-                           agree=agree, rel_tol=rel_tol, initial=initial)
+                           agree=agree, rel_tol=rel_tol, initial=initial, polish=polish)
     return solve(problem, workers=workers, on_replica_done=on_replica_done,
                  on_progress=on_progress)

@@ -135,6 +135,7 @@ class OpenForce(Problem):
         from stiffknots.theory.bounds import open_bounds
 
         self._setup(knot, replicas, seed)
+        self.polish = False  # the ends move at fixed force: the minimiser holds them fixed
         self.force = V.number("force", force, 0, lo_open=True)
         V.number("end_fraction", end_fraction, 0, 1, lo_open=True)
         V.number("slide_fraction", slide_fraction, 0, 1, lo_open=True)

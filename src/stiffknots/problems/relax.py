@@ -37,8 +37,15 @@ from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter, UserInputError
 from stiffknots.problems import validate as V
-from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, observe_shape, solve
-from stiffknots.problems.closed import default_moves
+from stiffknots.problems.base import (
+    Job,
+    Problem,
+    Replica,
+    ReplicaSet,
+    default_moves,
+    observe_shape,
+    solve,
+)
 
 D_BEAD = 1 / math.sqrt(2)
 
@@ -121,12 +128,14 @@ class Relax(Problem):
 
     def __init__(self, chain: Chain, beads: int = 150, moves: int | None = None,
                  replicas: int = 2, seed: int = 0, *, exclusion: str = "bead",
-                 w_over_L: float | None = None, knot: str | None = None):
+                 w_over_L: float | None = None, knot: str | None = None,
+                 polish: bool = True):
         from stiffknots.problems.base import start_code
 
         self.replicas = V.replicas(replicas)
         self.seed = V.seed(seed)
         self.beads = V.beads(beads)
+        self.polish = bool(polish)
         x, self.knot_name, self.naming, params = prepare_curve(chain, beads, exclusion,
                                                                 w_over_L, knot)
         self.input_epsilon = chain.epsilon()
@@ -156,7 +165,7 @@ class Relax(Problem):
         return self._bounds
 
     def settings_dict(self) -> dict:
-        return {**self.settings.as_dict(), "start": "input"}
+        return {**self.settings.as_dict(), "start": "input", "polish": self.polish}
 
     def result_fields(self, replicas):
         return {"input_epsilon": self.input_epsilon, "naming": self.naming}
@@ -179,7 +188,8 @@ def _bounds(name: str) -> dict:
 def relax(chain: Chain | np.ndarray, beads: int = 150, moves: int | None = None,
           replicas: int = 2, seed: int = 0, *, exclusion: str = "bead",
           w_over_L: float | None = None, knot: str | None = None,
-          workers: int | None = None, on_progress=None) -> RelaxResult:
+          workers: int | None = None, on_progress=None, polish: bool = True
+          ) -> RelaxResult:
     """Relax a closed curve of any bond lengths to the nearest stiff-knot equilibrium.
 
     Parameters
@@ -200,5 +210,5 @@ def relax(chain: Chain | np.ndarray, beads: int = 150, moves: int | None = None,
     if not isinstance(chain, Chain):
         chain = Chain(chain, closed=True)
     problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
-                    w_over_L=w_over_L, knot=knot)
+                    w_over_L=w_over_L, knot=knot, polish=polish)
     return solve(problem, workers=workers, on_progress=on_progress)

@@ -96,6 +96,7 @@ class Tightest(Problem):
         from stiffknots.theory.bounds import restricted_curvature_bounds
 
         self._setup(knot, replicas, seed, beads)
+        self.polish = False  # the power energy of §IX D is not the minimiser's E_d
         if not powers:
             V.integer("powers", None)
         powers = tuple(V.integer("powers", p, 1, 1024) for p in powers)
