@@ -8,8 +8,9 @@ Local (the default)
     listens on a free local port), logs silenced below ERROR, no memory limit (a job holds a
     few MB; Dask's memory monitor, which polls every worker through psutil, is off). The
     workers ignore SIGINT, so Ctrl-C in the terminal reaches the client only, which stops the
-    sweep and closes the cluster; if the client is killed (``kill -9``), every worker exits by itself as soon as
-    its parent's pipe closes (``distributed.process``) — nothing is left running.
+    sweep and closes the cluster; if the client is killed (``kill -9``), every worker exits
+    by itself as soon as its parent's pipe closes (``distributed.process``) — nothing is left
+    running.
 Remote (``scheduler="tcp://host:port"``)
     The client connects to a running scheduler whose workers have stiffknots installed (the
     same version: the jobs are pickled). Results come back to the client, which alone writes
