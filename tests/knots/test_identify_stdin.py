@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 
 from helpers import trefoil
-
 from stiffknots.knots.identify import homfly_code
 
 
