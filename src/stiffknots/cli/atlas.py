@@ -68,7 +68,7 @@ class SweepProgress(SweepListener):
             kw["last"] = last
         self.progress.update(self.task, **kw)
 
-    def progress(self, job: str, done: int, total: int, best=None) -> None:
+    def progress(self, job: str, done: int, total: int, best=None, pid=None) -> None:
         with self.lock:
             if total:
                 self.running[job] = min(done / total, 0.999)

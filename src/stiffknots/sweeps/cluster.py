@@ -16,15 +16,21 @@ Remote (``scheduler="tcp://host:port"``)
     same version: the jobs are pickled). Results come back to the client, which alone writes
     the store, so the database stays on the client's local disk.
 
-:func:`run_task` is what a worker runs: one :class:`~stiffknots.problems.base.Job` through
-:func:`~stiffknots.problems.base.run_job` (engine and knot verification), its progress sent to
-the client as Dask events on :data:`PROGRESS_TOPIC` (at most one per :data:`PROGRESS_PERIOD`
-seconds per job).
+:func:`run_task` is what a worker runs: it builds the (knot, model) problem of a sweep job
+(:func:`~stiffknots.sweeps.plan.build_jobs`, once per worker process) and runs that replica's
+:class:`~stiffknots.problems.base.Job` through :func:`~stiffknots.problems.base.run_job`
+(engine and knot verification), its progress sent to the client as Dask events on
+:data:`PROGRESS_TOPIC` (at most one per :data:`PROGRESS_PERIOD` seconds per job). The
+problems are built on the workers, not on the client: building computes HOMFLY-PT
+polynomials with topoly, whose compiled code closes file descriptor 0 (see
+:func:`stiffknots.knots.identify._keep_stdin`) — harmless in a worker, a hazard beside the
+client's sockets — and it spreads the building over the workers.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 import os
 import re
@@ -132,18 +138,38 @@ def connect(scheduler: str | None = None, workers: int | None = None,
                 cluster.close(timeout=10)
 
 
-def run_task(job: Any, job_id: str) -> Any:
-    """Worker: run one problem :class:`~stiffknots.problems.base.Job` and verify it
-    (:func:`~stiffknots.problems.base.run_job`), sending its progress to the client.
+@functools.lru_cache(maxsize=8)
+def _problem_jobs(knot: str, model: Any, budget: Any, seed: int, settings_text: str
+                  ) -> dict[int, Any]:
+    """The jobs of one (knot, model) problem, built once per worker process."""
+    import json
+
+    from stiffknots.sweeps.plan import build_jobs
+
+    return build_jobs(knot, model, budget, seed, json.loads(settings_text))
+
+
+def run_task(job: Any, budget: Any) -> Any:
+    """Worker: build the (knot, model) problem of a :class:`~stiffknots.sweeps.plan.SweepJob`
+    (:func:`~stiffknots.sweeps.plan.build_jobs`: ClosedAnneal's validation, starts and start
+    polynomials; cached per process), run its replica's problem
+    :class:`~stiffknots.problems.base.Job` and verify it
+    (:func:`~stiffknots.problems.base.run_job`), sending the progress to the client.
 
     Returns
     -------
     Replica
         The verified replica (its chain, ε, knot check, timings).
     """
+    from dataclasses import replace
+
     from stiffknots.problems.base import run_job
     from stiffknots.problems.pool import reporting_to
+    from stiffknots.store import canonical_json
 
+    jobs = _problem_jobs(job.knot, job.model, budget, job.seed, canonical_json(job.settings))
+    pjob = jobs[job.replica]
+    pjob = replace(pjob, coords=pjob.coords.copy())  # the cached start stays untouched
     try:
         from distributed import get_worker
 
@@ -159,8 +185,9 @@ def run_task(job: Any, job_id: str) -> Any:
             return
         last[0] = now
         best = info.get("best")
-        worker.log_event(PROGRESS_TOPIC, {"job": job_id, "done": done, "total": total,
-                                          "best": None if best is None else float(best)})
+        worker.log_event(PROGRESS_TOPIC, {"job": job.id, "done": done, "total": total,
+                                          "best": None if best is None else float(best),
+                                          "pid": os.getpid()})
 
     with reporting_to(send):
-        return run_job(job)
+        return run_job(pjob)

@@ -3,7 +3,8 @@
 A sweep over knots × models runs, for every (knot, model), the closed annealing problem of §VII
 (:class:`~stiffknots.problems.closed.ClosedAnneal`: its validation, starting chains, start
 polynomials and :class:`~stiffknots.problems.base.Job` objects) with ``budget.replicas``
-replicas of ``budget.moves`` moves. Every replica is one :class:`SweepJob`, whose
+replicas of ``budget.moves`` moves; the Dask workers build it (:func:`build_jobs`) and run
+its jobs. Every replica is one :class:`SweepJob`, whose
 :class:`~stiffknots.store.keys.ReplicaKey` — knot, exclusion, N, thickness, seed, replica,
 settings hash — is computed *before* anything is built, from :func:`sweep_settings`, so that
 a resumed sweep skips the stored replicas without building their problems (:func:`pending`).
@@ -30,7 +31,7 @@ from stiffknots.engine.driver import AnnealSettings
 from stiffknots.errors import InvalidParameter, UserInputError
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job
-from stiffknots.store import ReplicaKey, Store, settings_hash
+from stiffknots.store import ReplicaKey, Store, canonical_json, settings_hash
 from stiffknots.sweeps.budgets import Budget
 from stiffknots.sweeps.models import Model
 
@@ -211,7 +212,7 @@ def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
                            replicas=budget.replicas, seed=seed, params=model.params(),
                            start=starts)
     mine = {key: v for key, v in settings.items() if key not in ("problem", "start")}
-    if problem.settings.as_dict() != mine:
+    if canonical_json(problem.settings.as_dict()) != canonical_json(mine):
         raise RuntimeError(f"the settings of {knot}/{model.name} differ from the sweep's key "
                            "settings; this is a bug in stiffknots, please report it")
     return {j.replica: j for j in problem.jobs()}

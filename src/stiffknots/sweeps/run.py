@@ -2,10 +2,10 @@
 
 :func:`run_sweep` plans every job (:func:`~stiffknots.sweeps.plan.plan_sweep`), drops those
 whose key is stored (:func:`~stiffknots.sweeps.plan.pending`), and runs the rest on a Dask
-cluster (:func:`~stiffknots.sweeps.cluster.connect`). The problem of a (knot, model) is built
-on the client just before its first replica is submitted, and at most two jobs per worker
-thread are submitted at a time, so building and running overlap. Every result comes back to
-the client, which
+cluster (:func:`~stiffknots.sweeps.cluster.connect`), at most two jobs per worker thread
+submitted at a time (in plan order: knot by knot). The workers build each (knot, model)'s
+problem and run its replicas (:func:`~stiffknots.sweeps.cluster.run_task`). Every result
+comes back to the client, which
 
 1. refuses a replica whose knot type changed (never expected: a bug, never a data point —
    it is reported, not stored);
@@ -20,13 +20,13 @@ have already arrived are stored, the running jobs are cancelled, the cluster is 
 result says ``interrupted``. The same sweep run again skips everything stored and runs the
 rest. A worker that dies is replaced by its nanny and its job rerun (Dask's scheduler); a job
 that kills ``allowed-failures`` workers in a row is reported as failed, as is a job whose
-problem cannot be built (an embedding that does not fit): the others go on.
+problem cannot be built (an embedding that does not fit) or that raises: the others go on.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,7 +35,7 @@ from stiffknots.store import KeyCollisionError, Store, row_from_replica, setting
 from stiffknots.sweeps.budgets import Budget
 from stiffknots.sweeps.cluster import PROGRESS_TOPIC, connect, local_workers, run_task
 from stiffknots.sweeps.models import Model
-from stiffknots.sweeps.plan import SweepJob, build_jobs, pending, plan_sweep, sweep_settings
+from stiffknots.sweeps.plan import SweepJob, pending, plan_sweep, sweep_settings
 
 __all__ = ["SweepListener", "SweepResult", "run_sweep", "store_replica"]
 
@@ -50,8 +50,10 @@ class SweepListener:
     def cluster(self, description: str, threads: int) -> None:
         """Connected to the cluster."""
 
-    def progress(self, job: str, done: int, total: int, best: float | None = None) -> None:
-        """A running job's moves ``done`` of ``total``, its lowest ε so far."""
+    def progress(self, job: str, done: int, total: int, best: float | None = None,
+                 pid: int | None = None) -> None:
+        """A running job's moves ``done`` of ``total``, its lowest ε so far, the process id
+        of the worker running it."""
 
     def finished(self, job: SweepJob, row: dict | None, error: str | None) -> None:
         """A job ended: stored (``row``: its shape, ε, ...) or failed (``error``)."""
@@ -134,25 +136,6 @@ def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | No
     return store.put(row, coords), row
 
 
-def _feed(todo: Sequence[SweepJob], budget: Budget) -> Iterator[tuple[SweepJob, Any, str | None]]:
-    """(sweep job, problem Job or None, error or None), building each (knot, model)'s problem
-    when its first job is wanted."""
-    from stiffknots.errors import UserInputError
-
-    built: dict[tuple[str, str], dict | str] = {}
-    for sj in todo:
-        if sj.group not in built:
-            try:
-                built[sj.group] = build_jobs(sj.knot, sj.model, budget, sj.seed, sj.settings)
-            except UserInputError as e:  # an embedding that does not fit, ...
-                built[sj.group] = f"{type(e).__name__}: {e}"
-        jobs = built[sj.group]
-        if isinstance(jobs, str):
-            yield sj, None, jobs
-        else:
-            yield sj, jobs[sj.replica], None
-
-
 def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, store: Store, *,
               seed: int = 0, scheduler: str | None = None, workers: int | None = None,
               listener: SweepListener | None = None) -> SweepResult:
@@ -210,8 +193,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         listener.cluster(str(scheduler or f"local cluster, {threads} worker processes"),
                          threads)
         client.subscribe_topic(PROGRESS_TOPIC, lambda ev: _progress(listener, ev))
-        limit = max(2, 2 * threads)
-        feed = _feed(todo, budget)
+        limit = max(4, 2 * threads)
+        feed = iter(todo)
         inflight: dict[str, tuple[SweepJob, Any]] = {}
         ac = as_completed()
 
@@ -221,14 +204,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
 
         def top_up() -> None:
             while len(inflight) < limit:
-                item = next(feed, None)
-                if item is None:
+                sj = next(feed, None)
+                if sj is None:
                     return
-                sj, job, error = item
-                if error is not None:
-                    fail(sj, error)
-                    continue
-                fut = client.submit(run_task, job, sj.id, key=sj.task_key)
+                fut = client.submit(run_task, sj, budget, key=sj.task_key)
                 inflight[fut.key] = (sj, fut)
                 ac.add(fut)
 
@@ -274,6 +253,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
 def _progress(listener: SweepListener, event: Any) -> None:
     try:
         _, msg = event
-        listener.progress(msg["job"], int(msg["done"]), int(msg["total"]), msg.get("best"))
+        listener.progress(msg["job"], int(msg["done"]), int(msg["total"]), msg.get("best"),
+                          msg.get("pid"))
     except Exception:  # noqa: BLE001 (a progress display never stops a sweep)
         pass

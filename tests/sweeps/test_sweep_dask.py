@@ -1,0 +1,118 @@
+"""Sweeps on a real Dask LocalCluster (2 worker processes): every replica stored exactly once,
+a second run skips everything, a worker killed mid-sweep is replaced and its job rerun with
+nothing stored twice. (kill -9 and Ctrl-C of the whole sweep: tests/cli/test_atlas_cli.py.)"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import psutil
+import pytest
+
+from stiffknots.store import Store
+from stiffknots.sweeps import SweepListener, budget_of, parse_models, plan_sweep, run_sweep
+
+pytestmark = pytest.mark.slow  # each test starts a Dask cluster and anneals (≈ 20–60 s)
+
+
+class Recorder(SweepListener):
+    def __init__(self, on_progress=None):
+        self.events: list[tuple] = []
+        self.lock = threading.Lock()
+        self.on_progress = on_progress
+
+    def started(self, result):
+        self.events.append(("started", result.jobs, result.skipped))
+
+    def cluster(self, description, threads):
+        self.events.append(("cluster", threads))
+
+    def progress(self, job, done, total, best=None, pid=None):
+        with self.lock:
+            self.events.append(("progress", job, done, total, pid))
+        if self.on_progress is not None:
+            self.on_progress(job, done, total, pid)
+
+    def finished(self, job, row, error):
+        self.events.append(("finished", job.id, None if row is None else row["shape"], error))
+
+    def kinds(self, kind):
+        return [e for e in self.events if e[0] == kind]
+
+
+def _assert_stored_once(store, jobs):
+    keys = store.keys()
+    assert keys == {j.key for j in jobs}
+    assert store.count() == len(jobs)  # the UNIQUE key makes a second copy impossible
+    assert store.check()["ok"]
+    for r in store.replicas():
+        assert r["knot_verified"] is True
+        assert r["version"] and r["settings"]["problem"] == "anneal"
+        assert r["shape"] in ("CB", "4C", "80", "other")
+        assert r["start"] in ("braid", "cage", "eighty")
+        assert r["extra"]["width"].startswith("bead rule d = 1/√2, N = 150")
+
+
+def test_sweep_stores_every_replica_once_then_skips(tmp_path):
+    models = parse_models("bead")
+    budget = budget_of("tiny", moves=100_000)
+    knots = ["3_1", "4_1", "5_1"]
+    jobs = plan_sweep(knots, models, budget, seed=5)
+    with Store(tmp_path / "s.db") as st:
+        rec = Recorder()
+        res = run_sweep(knots, models, budget, st, seed=5, workers=2, listener=rec)
+        assert not res.interrupted and not res.failed
+        assert (res.jobs, res.skipped, res.ran, res.written) == (6, 0, 6, 6)
+        assert res.workers == 2 and res.complete
+        assert rec.kinds("cluster") == [("cluster", 2)]
+        assert sorted(e[1] for e in rec.kinds("finished")) == sorted(j.id for j in jobs)
+        _assert_stored_once(st, jobs)
+        # each row is the problem's replica: its seed derived from (5, replica)
+        from stiffknots.engine.driver import replica_seeds
+
+        seeds = replica_seeds(5, 2)
+        for r in st.replicas():
+            assert r["seed"] == 5 and r["replica_seed"] == seeds[r["replica"]]
+        first = {r["id"]: r["epsilon"] for r in st.replicas()}
+
+        rec2 = Recorder()
+        t0 = time.perf_counter()
+        res2 = run_sweep(knots, models, budget, st, seed=5, workers=2, listener=rec2)
+        assert (res2.jobs, res2.skipped, res2.ran, res2.written) == (6, 6, 0, 0)
+        assert rec2.kinds("cluster") == []  # nothing to run: no cluster started
+        assert time.perf_counter() - t0 < 10
+        assert {r["id"]: r["epsilon"] for r in st.replicas()} == first
+
+
+def test_killed_worker_is_replaced_and_nothing_stored_twice(tmp_path):
+    models = parse_models("bead")
+    budget = budget_of("tiny", moves=1_500_000)
+    knots = ["3_1", "4_1"]
+    jobs = plan_sweep(knots, models, budget, seed=0)
+    killed: list[tuple[str, int]] = []
+
+    def kill_one(job, done, total, pid):
+        # the first progress record of a running job: kill the worker process running it
+        if killed or done >= total or pid is None:
+            return
+        killed.append((job, pid))
+        os.kill(pid, signal.SIGKILL)
+
+    with Store(tmp_path / "s.db") as st:
+        rec = Recorder(kill_one)
+        res = run_sweep(knots, models, budget, st, seed=0, workers=2, listener=rec)
+        assert killed, "no worker was killed: the test did not test anything"
+        job, pid = killed[0]
+        assert not psutil.pid_exists(pid) or psutil.Process(pid).status() == "zombie"
+        assert not res.failed and not res.interrupted
+        assert (res.ran, res.written) == (4, 4)
+        _assert_stored_once(st, jobs)
+        # the killed worker's job ran again, in another worker process, from the start
+        mine = [e for e in rec.kinds("progress") if e[1] == job]
+        assert mine[0][4] == pid
+        rerun = [e for e in mine if e[4] != pid]
+        assert rerun and rerun[0][2] <= mine[0][2] < rerun[-1][2] == rerun[-1][3]
+        assert [e[3] for e in rec.kinds("finished") if e[1] == job] == [None]  # no error
