@@ -148,6 +148,7 @@ def atlas(
     from stiffknots.problems import validate as V
     from stiffknots.studies.atlas import run_atlas
     from stiffknots.sweeps import budget_of, parse_models, resolve_knots
+    from stiffknots.sweeps.cluster import local_workers, scheduler_address
 
     if max_crossings is None and knots is None:
         raise UserError("give --max-crossings K (every prime knot through K crossings) or "
@@ -159,6 +160,12 @@ def atlas(
         raise UserError("--w is the tube diameter: add tube to --models")
     bud = budget_of(budget, replicas=replicas, moves=moves)
     V.seed(seed)
+    if scheduler is None:
+        local_workers(workers)
+    else:
+        scheduler = scheduler_address(scheduler)
+        if workers is not None:
+            raise UserError("--workers is for the local cluster; a --scheduler has its own")
     _writable(out_dir, "--out")
     if db.exists() and db.is_dir():
         raise UserError(f"--db {db} is a folder; give the path of a database file")

@@ -41,7 +41,7 @@ from typing import Any
 from stiffknots.errors import UserInputError
 
 __all__ = ["PROGRESS_TOPIC", "PROGRESS_PERIOD", "connect", "run_task", "local_workers",
-           "IgnoreInterrupt"]
+           "scheduler_address", "IgnoreInterrupt"]
 
 #: The Dask event topic of the jobs' progress records.
 PROGRESS_TOPIC = "stiffknots-sweep-progress"
@@ -58,6 +58,16 @@ def local_workers(workers: int | None = None) -> int:
     if workers is None:
         return max(1, os.cpu_count() or 1)
     return V.integer("workers", workers, 1, 1024)
+
+
+def scheduler_address(scheduler: str) -> str:
+    """The address of a Dask scheduler (``tcp://host:port``, ``host:port``), checked for its
+    form only; UserInputError otherwise."""
+    address = str(scheduler).strip()
+    if not _ADDRESS.match(address):
+        raise UserInputError(f"--scheduler must be a scheduler address such as "
+                             f"tcp://host:8786, got {scheduler!r}")
+    return address
 
 
 try:
@@ -119,10 +129,7 @@ def connect(scheduler: str | None = None, workers: int | None = None,
             cluster.close()
             raise
     else:
-        address = str(scheduler).strip()
-        if not _ADDRESS.match(address):
-            raise UserInputError(f"--scheduler must be a scheduler address such as "
-                                 f"tcp://host:8786, got {scheduler!r}")
+        address = scheduler_address(scheduler)
         try:
             client = Client(address, timeout=f"{timeout}s")
         except (OSError, TimeoutError) as e:

@@ -33,7 +33,13 @@ from typing import Any
 from stiffknots._version import __version__
 from stiffknots.store import KeyCollisionError, Store, row_from_replica, settings_hash
 from stiffknots.sweeps.budgets import Budget
-from stiffknots.sweeps.cluster import PROGRESS_TOPIC, connect, local_workers, run_task
+from stiffknots.sweeps.cluster import (
+    PROGRESS_TOPIC,
+    connect,
+    local_workers,
+    run_task,
+    scheduler_address,
+)
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import SweepJob, pending, plan_sweep, sweep_settings
 
@@ -172,8 +178,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
     """
     listener = listener or SweepListener()
     t0 = time.perf_counter()
-    if scheduler is None:
-        local_workers(workers)  # a bad count is an error before anything starts
+    if scheduler is None:  # a bad count or address is an error before anything starts
+        local_workers(workers)
+    else:
+        scheduler_address(scheduler)
     jobs = plan_sweep(knots, models, budget, seed)
     res = SweepResult(list(knots), list(models), budget, int(seed),
                       {m.name: settings_hash(sweep_settings(m, budget)) for m in models},
