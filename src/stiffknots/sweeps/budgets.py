@@ -7,15 +7,22 @@ hence of its store key: two budgets never share results, while a budget with mor
 of the same moves reuses the replicas a smaller one stored (replica r's seed does not depend
 on the number of replicas).
 
-=========  ========  ============  =======================================================
-budget     replicas  moves         cost per (knot, model), CPU seconds on one core (measured
-                                   at N = 150, see :data:`MEASURED_CPU_SECONDS_PER_M_MOVES`)
-=========  ========  ============  =======================================================
-tiny       2         200,000       ≈ 0.3: a smoke test of the machinery, nothing converges
-small      2         5,000,000     ≈ 7
-default    4         30,000,000    ≈ 80 (the ``anneal`` command's 30 M moves per replica)
-full       8         100,000,000   ≈ 540
-=========  ========  ============  =======================================================
+=========  ========  ============  ==================================================
+budget     replicas  moves         CPU seconds per (knot, model) on one core, N = 150
+=========  ========  ============  ==================================================
+tiny       2         200,000       ≈ 0.3 — a smoke test of the machinery, nothing converges
+small      2         5,000,000     ≈ 7.4 (measured 4.9–12.1 over 8 knots × 2 models)
+default    4         30,000,000    ≈ 89 (estimated; ``anneal``'s 30 M moves per replica)
+full       8         100,000,000   ≈ 590 (estimated)
+=========  ========  ============  ==================================================
+
+The measurement (:data:`MEASURED_CPU_SECONDS_PER_M_MOVES`): ``stiffknots atlas --budget small``
+on 3_1, 5_2, 6_2, 7_4, 8_19, 9_42, 10_1, 10_161 under both models — 32 replicas, 118.9 CPU
+seconds for 160 M moves: 0.74 s per million moves (the n = i knots, whose replicas end as
+circular braids, were the slowest: 1.0–1.2 s). A sweep of
+every prime knot through 10 crossings (249 knots × 2 models) on 2 free cores then takes about
+30 min on ``small``, 6 h on ``default``, 41 h on ``full``, plus a few seconds per (knot, model)
+to build its starts.
 """
 
 from __future__ import annotations
@@ -28,9 +35,8 @@ from stiffknots.problems import validate as V
 __all__ = ["Budget", "BUDGETS", "budget_of", "MEASURED_CPU_SECONDS_PER_M_MOVES"]
 
 #: CPU seconds per million attempted moves of one replica at N = 150 under the default
-#: schedule, mean over 3_1 … 10_161 under both models (bench in the module docstring; the
-#: report of the sweeps work gives the spread).
-MEASURED_CPU_SECONDS_PER_M_MOVES = 0.67
+#: schedule, mean over 8 knots (3_1 … 10_161) under both models (module docstring).
+MEASURED_CPU_SECONDS_PER_M_MOVES = 0.74
 
 
 @dataclass(frozen=True)
