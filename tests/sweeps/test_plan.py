@@ -163,3 +163,16 @@ def test_model_validation():
         Model("soft").validate()
     with pytest.raises(InvalidParameter):
         Model("bead", D, beads=4).validate()
+
+
+def test_unreachable_scheduler_is_a_user_error():
+    from stiffknots.sweeps.cluster import connect, scheduler_address
+
+    with pytest.raises(UserInputError, match="no Dask scheduler answers"):
+        with connect("tcp://127.0.0.1:9", timeout=2):
+            pass
+    assert scheduler_address(" tcp://10.0.0.1:8786 ") == "tcp://10.0.0.1:8786"
+    assert scheduler_address("localhost:8786") == "localhost:8786"
+    for bad in ("", "not an address", "http//x"):
+        with pytest.raises(UserInputError, match="--scheduler"):
+            scheduler_address(bad)

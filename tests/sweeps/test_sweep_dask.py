@@ -116,3 +116,35 @@ def test_killed_worker_is_replaced_and_nothing_stored_twice(tmp_path):
         rerun = [e for e in mine if e[4] != pid]
         assert rerun and rerun[0][2] <= mine[0][2] < rerun[-1][2] == rerun[-1][3]
         assert [e[3] for e in rec.kinds("finished") if e[1] == job] == [None]  # no error
+
+
+def test_sweep_on_an_existing_scheduler(tmp_path):
+    """--scheduler: the client connects to a running cluster (here one started beside it)."""
+    import logging
+
+    from distributed import LocalCluster
+
+    models = parse_models("tube")
+    budget = budget_of("tiny", moves=50_000)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                      dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
+                      memory_limit=0) as cluster, Store(tmp_path / "s.db") as st:
+        res = run_sweep(["3_1"], models, budget, st, seed=1,
+                        scheduler=cluster.scheduler_address)
+        assert res.scheduler == cluster.scheduler_address and res.workers == 1
+        assert (res.ran, res.written, res.failed) == (2, 2, [])
+        assert {r["exclusion"] for r in st.replicas()} == {"tube"}
+        assert {r["thickness"] for r in st.replicas()} == {models[0].thickness}
+
+
+def test_a_job_that_cannot_be_built_is_reported_not_stored(tmp_path):
+    """8_19 does not fit in 20 beads: its replicas fail (the worker's EmbeddingError), the
+    sweep goes on and stores nothing for them."""
+    from stiffknots.sweeps import Model
+
+    model = Model("bead", parse_models("bead")[0].thickness, beads=20)
+    with Store(tmp_path / "s.db") as st:
+        res = run_sweep(["8_19"], [model], budget_of("tiny"), st, workers=1)
+        assert len(res.failed) == 2 and res.ran == 0 and not res.interrupted
+        assert all("EmbeddingError" in f["error"] for f in res.failed)
+        assert st.count() == 0

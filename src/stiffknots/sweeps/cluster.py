@@ -4,10 +4,11 @@ Local (the default)
     ``distributed.LocalCluster`` with one worker *process* per core, one thread each, every
     worker under a nanny: a worker that dies (killed, out of memory) is replaced and the
     scheduler reruns its task on another worker (up to ``distributed.scheduler.allowed-
-    failures``, default 3, times per task). No dashboard, no port to configure (the scheduler
-    listens on a free local port), logs silenced below ERROR, no memory limit (a job holds a
-    few MB; Dask's memory monitor, which polls every worker through psutil, is off). The
-    workers ignore SIGINT, so Ctrl-C in the terminal reaches the client only, which stops the
+    failures``, default 3, times per task). No port to configure: the scheduler and its HTTP
+    endpoints (the dashboard, when bokeh is installed) listen on free ports of 127.0.0.1
+    only. Logs are silenced below ERROR. No memory limit (a job holds a few MB; Dask's
+    memory monitor, which polls every worker through psutil, is off). The workers ignore
+    SIGINT, so Ctrl-C in the terminal reaches the client only, which stops the
     sweep and closes the cluster; if the client is killed (``kill -9``), every worker exits
     by itself as soon as its parent's pipe closes (``distributed.process``) — nothing is left
     running.
@@ -120,7 +121,7 @@ def connect(scheduler: str | None = None, workers: int | None = None,
     if scheduler is None:
         n = local_workers(workers)
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR,
+                               dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
                                scheduler_port=0, memory_limit=0)
         try:
             client = Client(cluster)
