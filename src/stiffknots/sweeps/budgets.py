@@ -11,18 +11,22 @@ on the number of replicas).
 budget     replicas  moves         CPU seconds per (knot, model) on one core, N = 150
 =========  ========  ============  ==================================================
 tiny       2         200,000       ≈ 0.3 — a smoke test of the machinery, nothing converges
-small      2         5,000,000     ≈ 7.4 (measured 4.9–12.1 over 8 knots × 2 models)
-default    4         30,000,000    ≈ 89 (estimated; ``anneal``'s 30 M moves per replica)
-full       8         100,000,000   ≈ 590 (estimated)
+small      2         5,000,000     ≈ 6 (measured 4.9–12.1 over 8 knots × 2 models)
+default    4         30,000,000    ≈ 76 (measured 57–66 on 4 knots of n ≠ i, bead rule)
+full       8         100,000,000   ≈ 500 (extrapolated)
 =========  ========  ============  ==================================================
 
-The measurement (:data:`MEASURED_CPU_SECONDS_PER_M_MOVES`): ``stiffknots atlas --budget small``
-on 3_1, 5_2, 6_2, 7_4, 8_19, 9_42, 10_1, 10_161 under both models — 32 replicas, 118.9 CPU
-seconds for 160 M moves: 0.74 s per million moves (the n = i knots, whose replicas end as
-circular braids, were the slowest: 1.0–1.2 s). A sweep of
-every prime knot through 10 crossings (249 knots × 2 models) on 2 free cores then takes about
-30 min on ``small``, 6 h on ``default``, 41 h on ``full``, plus a few seconds per (knot, model)
-to build its starts.
+Measurements (``stiffknots atlas``, seed 0, CPU seconds of the replicas as the engine reports
+them, on the shared 2-core machine): ``small`` on 3_1, 5_2, 6_2, 7_4, 8_19, 9_42, 10_1,
+10_161 under both models — 32 replicas, 118.9 s for 160 M moves; ``default`` on 5_2, 6_2,
+7_4, 10_1 under the bead rule — 16 replicas, 238.6 s for 480 M moves. Per million moves: the
+knots with n ≠ i cost 0.43–0.66 s (0.50 at 30 M moves per replica), the n = i knots, whose
+replicas end as circular braids, 0.71–1.21 s; the tube model costs ≈ 15 % more than the bead
+rule. Through 10 crossings 46 of the 249 knots have n = i, so the mix costs ≈ 0.63 s per
+million moves (:data:`MEASURED_CPU_SECONDS_PER_M_MOVES`). A sweep of every prime knot
+through 10 crossings under both models (498 (knot, model) pairs) on 2 free cores then takes
+about 26 min on ``small``, 5.3 h on ``default``, 35 h on ``full``, plus well under a second
+of CPU per (knot, model) and worker to build its starts (seconds for the 80 starts).
 """
 
 from __future__ import annotations
@@ -35,8 +39,8 @@ from stiffknots.problems import validate as V
 __all__ = ["Budget", "BUDGETS", "budget_of", "MEASURED_CPU_SECONDS_PER_M_MOVES"]
 
 #: CPU seconds per million attempted moves of one replica at N = 150 under the default
-#: schedule, mean over 8 knots (3_1 … 10_161) under both models (module docstring).
-MEASURED_CPU_SECONDS_PER_M_MOVES = 0.74
+#: schedule, for the mix of knots through 10 crossings (module docstring).
+MEASURED_CPU_SECONDS_PER_M_MOVES = 0.63
 
 
 @dataclass(frozen=True)
