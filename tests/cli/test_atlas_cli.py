@@ -53,6 +53,7 @@ def _error_line(err: str) -> str:
     ("--knots", "3_1", "--moves", "10"),
     ("--knots", "3_1", "--seed", "-1"),
     ("--knots", "3_1", "--workers", "0"),
+    ("--knots", "3_1", "--max-replicas", "1"),  # fewer than the budget's 2
     ("--knots", "3_1", "--scheduler", "not an address"),
 ])
 def test_atlas_bad_options_exit_2_one_line(tmp_path, args):

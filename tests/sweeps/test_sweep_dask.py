@@ -148,3 +148,37 @@ def test_a_job_that_cannot_be_built_is_reported_not_stored(tmp_path):
         assert len(res.failed) == 2 and res.ran == 0 and not res.interrupted
         assert all("EmbeddingError" in f["error"] for f in res.failed)
         assert st.count() == 0
+
+
+def test_replicas_added_until_converged(tmp_path):
+    """max_replicas: a (knot, model) whose first replicas disagree gets 2 more; one whose
+    first replicas agree gets none; the same sweep again runs nothing."""
+    from stiffknots.analysis import group_states
+    from stiffknots.sweeps import is_converged
+
+    models = parse_models("bead")
+    budget = budget_of("tiny")
+    with Store(tmp_path / "s.db") as st:
+        rec = Recorder()
+        rec.added = lambda n: rec.events.append(("added", n))
+        res = run_sweep(["3_1", "4_1"], models, budget, st, seed=0, workers=2,
+                        max_replicas=4, listener=rec)
+        assert not res.failed and res.added > 0, "nothing added: the test tested nothing"
+        assert res.jobs == 4 + res.added and res.ran == res.jobs and res.max_replicas == 4
+        assert sum(e[1] for e in rec.kinds("added")) == res.added
+        for knot in ("3_1", "4_1"):
+            rows = st.replicas(knot=knot)
+            first = [{"label": r["shape"], "multiplicity": r["multiplicity"],
+                      "epsilon": r["epsilon"]} for r in rows if r["replica"] < 2]
+            g = group_states(first, 0.01).states[0]
+            agreed = is_converged({"count": g.count, "epsilon": g.eps_min,
+                                   "eps_max": g.eps_max})
+            assert len(rows) == (2 if agreed else 4), knot
+            assert sorted(r["replica"] for r in rows) == list(range(len(rows)))
+            assert len({r["settings_hash"] for r in rows}) == 1  # one ensemble
+        n = st.count()
+        res2 = run_sweep(["3_1", "4_1"], models, budget, st, seed=0, workers=2,
+                         max_replicas=4)
+        assert (res2.ran, res2.workers, st.count()) == (0, 0, n)
+        # the added replicas count as stored (or are not needed: the 4 agree by now)
+        assert res2.skipped == res2.jobs and res2.jobs in (4, res.jobs)

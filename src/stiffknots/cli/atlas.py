@@ -74,6 +74,12 @@ class SweepProgress(SweepListener):
                 self.running[job] = min(done / total, 0.999)
             self._update()
 
+    def added(self, jobs: int) -> None:
+        with self.lock:
+            self.total += jobs
+            if self.task is not None:
+                self.progress.update(self.task, total=self.total)
+
     def finished(self, job, row, error) -> None:
         with self.lock:
             self.running.pop(job.id, None)
@@ -139,6 +145,10 @@ def atlas(
         help="Replicas per knot and model instead of the budget's.")] = None,
     moves: Annotated[int | None, typer.Option(
         help="Attempted moves per replica instead of the budget's.")] = None,
+    max_replicas: Annotated[int | None, typer.Option(
+        help="Add replicas, 2 at a time, to every knot and model whose ground state has not "
+             "converged, up to this many in all (default: the budget's; none added).")
+    ] = None,
     seed: SeedOpt = 0,
     json_: JsonOpt = False,
 ) -> None:
@@ -160,6 +170,8 @@ def atlas(
         raise UserError("--w is the tube diameter: add tube to --models")
     bud = budget_of(budget, replicas=replicas, moves=moves)
     V.seed(seed)
+    if max_replicas is not None:
+        V.integer("max_replicas", max_replicas, bud.replicas, V.MAX_REPLICAS)
     if scheduler is None:
         local_workers(workers)
     else:
@@ -172,7 +184,8 @@ def atlas(
     command = "stiffknots " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     with SweepProgress(disable=json_) as bar:
         d = run_atlas(names, mods, bud, db=db, out=out_dir, seed=seed, scheduler=scheduler,
-                      workers=workers, listener=bar, command=command)
+                      workers=workers, max_replicas=max_replicas, listener=bar,
+                      command=command)
     sw = d["sweep"]
     stored = sw["skipped"] + sw["ran"]
     if sw["interrupted"]:
@@ -224,7 +237,8 @@ def _print(d: dict, mods) -> None:
                   f"{g['converged']}", highlight=False, markup=False)
     conv = ", ".join(f"{k} {100 * v:.0f} %" for k, v in d["converged"].items() if v is not None)
     out.print(f"converged ({fam['rule']}): {conv}", highlight=False, markup=False)
-    out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now, "
+    added = f", {sw['added']} added until converged" if sw["added"] else ""
+    out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}, "
               f"{sw['wall_seconds']:.0f} s wall, {sw['cpu_seconds']:.0f} CPU s)",
               highlight=False)
     out.print(f"atlas: {d['html']}\ndatabase: {d['db']}", highlight=False, markup=False)

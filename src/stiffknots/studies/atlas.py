@@ -301,8 +301,8 @@ def _plot_eps_n2(study: Mapping, path: Path) -> Path | None:
 def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
               db: str | Path = DEFAULT_DB, out: str | Path = DEFAULT_OUT, seed: int = 0,
               scheduler: str | None = None, workers: int | None = None,
-              listener: SweepListener | None = None, thumbnails: bool = True,
-              command: str | None = None) -> dict:
+              max_replicas: int | None = None, listener: SweepListener | None = None,
+              thumbnails: bool = True, command: str | None = None) -> dict:
     """Sweep ``knots`` × ``models`` on ``budget``, then write the atlas from the store.
 
     Parameters
@@ -318,7 +318,9 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
     out : path
         The atlas folder (``index.html``, ``knots/``, ``atlas.json``, ``families.json``,
         ``eps_vs_n2.png``).
-    seed, scheduler, workers, listener : see :func:`stiffknots.sweeps.run_sweep`.
+    seed, scheduler, workers, max_replicas, listener : see
+        :func:`stiffknots.sweeps.run_sweep` (``max_replicas``: replicas added to the
+        (knot, model)s not converged, up to that many in all).
     thumbnails : bool
         Draw the ground-state thumbnails.
     command : str, optional
@@ -338,7 +340,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
     main = next((m.name for m in models if m.name == "bead"), models[0].name)
     with Store(db) as store:
         sweep: SweepResult = run_sweep(knots, models, budget, store, seed=seed,
-                                       scheduler=scheduler, workers=workers, listener=listener)
+                                       scheduler=scheduler, workers=workers,
+                                       max_replicas=max_replicas, listener=listener)
         result: dict[str, Any] = {"db": str(db), "html": None, "sweep": sweep.to_dict()}
         if sweep.interrupted:
             return result
@@ -349,7 +352,10 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
         width = next(m.width()["text"] for m in models if m.name == main)
         grounds = {e["name"]: e["models"][main]["ground"] for e in entries}
         study = family_study(grounds, model=main, width=width)
-        meta = {"budget": f"{budget.name}: {budget.replicas} replicas × {budget.moves:,} moves",
+        more = (f", up to {sweep.max_replicas} until converged"
+                if sweep.max_replicas > budget.replicas else "")
+        meta = {"budget": f"{budget.name}: {budget.replicas} replicas × {budget.moves:,} moves"
+                          + more,
                 "seed": seed, "models": "; ".join(m.width()["text"] for m in models),
                 "database": str(db), "converged": CONVERGENCE_RULE,
                 "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),

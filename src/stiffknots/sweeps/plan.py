@@ -164,7 +164,9 @@ def pending(jobs: Sequence[SweepJob], store: Store) -> list[SweepJob]:
         return []
     hashes = sorted({j.key.settings_hash for j in jobs})
     seeds = sorted({j.seed for j in jobs})
-    stored = store.keys(settings_hash=hashes, seed=seeds, problem=PROBLEM)
+    knots = sorted({j.knot for j in jobs})
+    stored = store.keys(settings_hash=hashes, seed=seeds, problem=PROBLEM,
+                        knot=knots if len(knots) <= 100 else None)
     return [j for j in jobs if j.key not in stored]
 
 

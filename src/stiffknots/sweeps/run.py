@@ -15,6 +15,12 @@ comes back to the client, which
    transaction per row, so a killed client leaves whole rows or none, and a row whose key is
    stored is not written again.
 
+Replicas until converged. With ``max_replicas`` above the budget's replicas, a (knot, model)
+whose replicas have all ended without a converged ground state
+(:mod:`stiffknots.sweeps.convergence`) gets ``step`` more replicas (the budget's moves and
+settings: the same ensemble), and so on up to ``max_replicas``; the n = i knots, whose
+circular braids two replicas agree on at once, then cost no more than they need.
+
 Interruption and resumption. Ctrl-C (KeyboardInterrupt) stops the sweep: the results that
 have already arrived are stored, the running jobs are cancelled, the cluster is closed and the
 result says ``interrupted``. The same sweep run again skips everything stored and runs the
@@ -26,11 +32,13 @@ problem cannot be built (an embedding that does not fit) or that raises: the oth
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from stiffknots._version import __version__
+from stiffknots.problems import validate as V
 from stiffknots.store import KeyCollisionError, Store, row_from_replica, settings_hash
 from stiffknots.sweeps.budgets import Budget
 from stiffknots.sweeps.cluster import (
@@ -40,10 +48,11 @@ from stiffknots.sweeps.cluster import (
     run_task,
     scheduler_address,
 )
+from stiffknots.sweeps.convergence import is_converged
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import SweepJob, pending, plan_sweep, sweep_settings
 
-__all__ = ["SweepListener", "SweepResult", "run_sweep", "store_replica"]
+__all__ = ["SweepListener", "SweepResult", "run_sweep", "store_replica", "ensemble_converged"]
 
 
 class SweepListener:
@@ -64,6 +73,9 @@ class SweepListener:
     def finished(self, job: SweepJob, row: dict | None, error: str | None) -> None:
         """A job ended: stored (``row``: its shape, ε, ...) or failed (``error``)."""
 
+    def added(self, jobs: int) -> None:
+        """``jobs`` more jobs to run: replicas added to a (knot, model) not yet converged."""
+
 
 @dataclass
 class SweepResult:
@@ -80,6 +92,8 @@ class SweepResult:
     interrupted : stopped by Ctrl-C (the rest resumes with the same sweep).
     wall_seconds : of the whole sweep; cpu_seconds : the finished replicas' CPU time.
     workers : worker threads of the cluster; scheduler : ``"local"`` or its address.
+    max_replicas : the most replicas a (knot, model) may get; added : replicas planned beyond
+    the budget's for (knot, model)s not converged (counted in ``jobs``).
     """
 
     knots: list[str]
@@ -97,6 +111,8 @@ class SweepResult:
     cpu_seconds: float = 0.0
     workers: int = 0
     scheduler: str = "local"
+    max_replicas: int = 0
+    added: int = 0
     version: str = __version__
 
     @property
@@ -117,7 +133,9 @@ class SweepResult:
                 "skipped": self.skipped, "ran": self.ran, "written": self.written,
                 "failed": self.failed, "interrupted": self.interrupted,
                 "wall_seconds": self.wall_seconds, "cpu_seconds": self.cpu_seconds,
-                "workers": self.workers, "scheduler": self.scheduler, "version": self.version}
+                "workers": self.workers, "scheduler": self.scheduler,
+                "max_replicas": self.max_replicas, "added": self.added,
+                "version": self.version}
 
 
 def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | None = None
@@ -142,8 +160,19 @@ def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | No
     return store.put(row, coords), row
 
 
+def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str) -> bool:
+    """Whether the stored ground state of one (knot, model) ensemble is converged
+    (:func:`~stiffknots.sweeps.convergence.is_converged`); False when nothing is stored."""
+    if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
+                       thickness=model.thickness, settings_hash=settings_hash):
+        return False
+    st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash)
+    return is_converged(st["ground"])
+
+
 def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, store: Store, *,
               seed: int = 0, scheduler: str | None = None, workers: int | None = None,
+              max_replicas: int | None = None, step: int = 2,
               listener: SweepListener | None = None) -> SweepResult:
     """Run every job of knots × models × replicas that ``store`` lacks; store each result.
 
@@ -163,6 +192,14 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         Address of a running Dask scheduler; default: a local cluster.
     workers : int, optional
         Worker processes of the local cluster (default: one per core).
+    max_replicas : int, optional
+        Replicas are added, ``step`` at a time, to every (knot, model) whose ground state has
+        not converged once its replicas have ended
+        (:func:`~stiffknots.sweeps.convergence.is_converged`), up to ``max_replicas`` in all.
+        Default: the budget's replicas (nothing added). The added replicas have the budget's
+        moves and settings: they join the same ensemble, and a resumed sweep skips them too.
+    step : int
+        Replicas added at a time.
     listener : SweepListener, optional
         Told of the plan, the progress and each finished job.
 
@@ -182,14 +219,46 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         local_workers(workers)
     else:
         scheduler_address(scheduler)
+    max_r = budget.replicas if max_replicas is None else V.integer(
+        "max_replicas", max_replicas, budget.replicas, V.MAX_REPLICAS)
+    step = V.integer("step", step, 1, V.MAX_REPLICAS)
     jobs = plan_sweep(knots, models, budget, seed)
     res = SweepResult(list(knots), list(models), budget, int(seed),
                       {m.name: settings_hash(sweep_settings(m, budget)) for m in models},
-                      jobs=len(jobs), scheduler=scheduler or "local")
+                      jobs=len(jobs), scheduler=scheduler or "local", max_replicas=max_r)
     todo = pending(jobs, store)
     res.skipped = len(jobs) - len(todo)
+    # per (knot, model): its model, replicas planned so far, jobs not yet ended
+    groups: dict[tuple[str, str], dict] = {}
+    for j in jobs:
+        groups.setdefault(j.group, {"knot": j.knot, "model": j.model,
+                                    "replicas": budget.replicas, "open": 0})
+    for j in todo:
+        groups[j.group]["open"] += 1
+
+    def extend(g: dict) -> list[SweepJob]:
+        """The replicas to add to a (knot, model) whose replicas have all ended."""
+        while g["replicas"] < max_r and not ensemble_converged(
+                store, g["knot"], g["model"], res.settings_hash[g["model"].name]):
+            n = min(max_r, g["replicas"] + step)
+            more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
+                              seed)[g["replicas"]:]
+            g["replicas"] = n
+            new = pending(more, store)
+            res.jobs += len(more)
+            res.skipped += len(more) - len(new)
+            res.added += len(more)
+            if new:
+                g["open"] += len(new)
+                return new
+        return []
+
+    feed: deque[SweepJob] = deque(todo)
+    for g in groups.values():
+        if g["open"] == 0:
+            feed.extend(extend(g))
     listener.started(res)
-    if not todo:
+    if not feed:
         res.wall_seconds = time.perf_counter() - t0
         return res
 
@@ -202,7 +271,6 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                          threads)
         client.subscribe_topic(PROGRESS_TOPIC, lambda ev: _progress(listener, ev))
         limit = max(4, 2 * threads)
-        feed = iter(todo)
         inflight: dict[str, tuple[SweepJob, Any]] = {}
         ac = as_completed()
 
@@ -211,35 +279,41 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             listener.finished(sj, None, error)
 
         def top_up() -> None:
-            while len(inflight) < limit:
-                sj = next(feed, None)
-                if sj is None:
-                    return
-                fut = client.submit(run_task, sj, budget, key=sj.task_key)
+            while len(inflight) < limit and feed:
+                sj = feed.popleft()
+                b = replace(budget, replicas=groups[sj.group]["replicas"])
+                fut = client.submit(run_task, sj, b, key=sj.task_key)
                 inflight[fut.key] = (sj, fut)
                 ac.add(fut)
 
         def collect(fut: Any) -> None:
             sj, _ = inflight.pop(fut.key)
+            g = groups[sj.group]
+            g["open"] -= 1
             if fut.status != "finished":
                 exc = fut.exception() if fut.status == "error" else None
                 fail(sj, f"{type(exc).__name__}: {exc}" if exc is not None else fut.status)
-                return
-            r = fut.result()
-            fut.release()
-            if not r.knot_verified:
-                fail(sj, f"TopologyChangedError: the replica ended as {r.knot} (a bug in "
-                         f"stiffknots, please report it with seed {sj.seed}); not stored")
-                return
-            try:
-                written, row = store_replica(store, sj, r, budget=budget.name)
-            except KeyCollisionError as e:
-                fail(sj, f"KeyCollisionError: {e}")
-                return
-            res.ran += 1
-            res.written += int(written)
-            res.cpu_seconds += float(r.cpu_time or 0.0)
-            listener.finished(sj, row, None)
+            else:
+                r = fut.result()
+                fut.release()
+                if not r.knot_verified:
+                    fail(sj, f"TopologyChangedError: the replica ended as {r.knot} (a bug in "
+                             f"stiffknots, please report it with seed {sj.seed}); not stored")
+                else:
+                    try:
+                        written, row = store_replica(store, sj, r, budget=budget.name)
+                    except KeyCollisionError as e:
+                        fail(sj, f"KeyCollisionError: {e}")
+                    else:
+                        res.ran += 1
+                        res.written += int(written)
+                        res.cpu_seconds += float(r.cpu_time or 0.0)
+                        listener.finished(sj, row, None)
+            if g["open"] == 0 and not res.interrupted:
+                new = extend(g)
+                if new:
+                    feed.extend(new)
+                    listener.added(len(new))
 
         try:
             top_up()
