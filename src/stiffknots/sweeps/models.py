@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 from stiffknots.engine.params import MoveParams
 from stiffknots.errors import InvalidParameter
 
-__all__ = ["Model", "MODELS", "DEFAULT_BEADS", "BEAD_D", "parse_models"]
+__all__ = ["Model", "MODELS", "DEFAULT_BEADS", "BEAD_D", "parse_models", "for_beads"]
 
 #: The paper's bead count (§VII).
 DEFAULT_BEADS = 150
@@ -23,6 +23,14 @@ DEFAULT_BEADS = 150
 BEAD_D = MoveParams().d
 #: The model names.
 MODELS = ("bead", "tube")
+
+
+def for_beads(obj, beads: int):
+    """``obj.for_beads(beads)`` where the engine's parameters have it (sizes that scale with
+    N, as :class:`~stiffknots.problems.closed.ClosedAnneal` applies them), else ``obj``: the
+    sweep's key settings must be exactly the problem's."""
+    f = getattr(obj, "for_beads", None)
+    return f(beads) if callable(f) else obj
 
 
 @dataclass(frozen=True)
@@ -52,10 +60,13 @@ class Model:
         return self.thickness / self.beads
 
     def params(self) -> MoveParams:
-        """The move parameters of the model (every other field at its default)."""
+        """The move parameters of the model (every other field at its default, sized for N
+        as the problems size them: :func:`for_beads`)."""
         if self.name == "tube":
-            return replace(MoveParams(), exclusion="tube", w=self.thickness)
-        return replace(MoveParams(), exclusion="bead", d=self.thickness)
+            p = replace(MoveParams(), exclusion="tube", w=self.thickness)
+        else:
+            p = replace(MoveParams(), exclusion="bead", d=self.thickness)
+        return for_beads(p, self.beads)
 
     def width(self) -> dict:
         """The width every number of this model was computed at (for reports): the model's

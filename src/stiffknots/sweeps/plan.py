@@ -33,7 +33,7 @@ from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job
 from stiffknots.store import ReplicaKey, Store, canonical_json, settings_hash
 from stiffknots.sweeps.budgets import Budget
-from stiffknots.sweeps.models import Model
+from stiffknots.sweeps.models import Model, for_beads
 
 __all__ = ["PROBLEM", "START_POLICY", "SweepJob", "sweep_settings", "resolve_knots",
            "plan_sweep", "pending", "sweep_starts", "build_jobs"]
@@ -46,10 +46,14 @@ START_POLICY = "braid,cage,eighty"
 
 def sweep_settings(model: Model, budget: Budget) -> dict[str, Any]:
     """The settings of every replica of ``model`` under ``budget`` (the input of the key's
-    settings hash): ``AnnealSettings(moves, params=model.params()).as_dict()`` plus
+    settings hash): ``AnnealSettings(moves, schedule, params=model.params()).as_dict()`` —
+    built as ClosedAnneal builds them, which :func:`build_jobs` checks — plus
     ``problem`` and ``start`` (:func:`stiffknots.store.keys.settings_hash` says what belongs
     there)."""
-    s = AnnealSettings(moves=budget.moves, params=model.params())
+    from stiffknots.engine.schedules import Schedule
+
+    s = AnnealSettings(moves=budget.moves, schedule=for_beads(Schedule(), model.beads),
+                       params=model.params())
     s.validate()
     return {**s.as_dict(), "problem": PROBLEM, "start": START_POLICY}
 
