@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import typer
 
-from stiffknots.cli import anneal, catalogue, curves, open, studies, tightest
+from stiffknots.cli import anneal, atlas, catalogue, curves, db, open, studies, tightest
 from stiffknots.cli.app import Interrupted, app, err
 from stiffknots.errors import InvalidParameter, UserInputError
 
@@ -21,10 +21,12 @@ for _name, _command in (
         ("open", open.open_knot),
         ("tightest", tightest.tightest),
         ("paper", studies.paper),
+        ("atlas", atlas.atlas),
         ("bench", studies.bench),
         ("warmup", studies.warmup),
         ("version", catalogue.version)):
     app.command(_name)(_command)
+app.add_typer(db.db_app, name="db")  # the results database: states, grounds
 
 # API parameter → command-line option, where the names differ
 OPTION_NAMES = {"n_beads": "--beads", "checkpoint_dir": "--checkpoint"}

@@ -67,6 +67,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 import re
 import threading
 from dataclasses import dataclass
@@ -173,14 +174,45 @@ def normalize_name(name: str) -> str:
 
 
 @contextlib.contextmanager
+def _keep_stdin():
+    """Give file descriptor 0 back after a topoly call that closed it.
+
+    topoly's compiled HOMFLY-PT code (``liblmpoly``) closes descriptor 0 on every call, whatever
+    it is. Left closed, the next file or socket the process opens gets number 0 — and the next
+    call closes *that*: a checkpoint being written, or a Dask connection (seen as "fd 0 added
+    twice" and "Bad file descriptor" in a sweep's client). So descriptor 0 is duplicated before
+    the call and put back after it; if another thread took number 0 in the meantime (a socket
+    opened during the call), it is left alone — only then can the race still bite.
+    """
+    try:
+        saved = os.dup(0)
+    except OSError:  # already closed: hold number 0 with /dev/null for the call to close
+        fd = os.open(os.devnull, os.O_RDONLY)
+        if fd != 0:
+            os.close(fd)
+            yield
+            return
+        saved = os.dup(0)
+    try:
+        yield
+    finally:
+        try:
+            os.fstat(0)
+        except OSError:  # closed by the call: put the original back
+            os.dup2(saved, 0)
+        os.close(saved)
+
+
+@contextlib.contextmanager
 def _quiet():
-    """Silence Python-level output on stdout/stderr during topoly calls.
+    """Silence Python-level output on stdout/stderr during topoly calls, and keep descriptor
+    0 open (:func:`_keep_stdin`).
 
     Only the Python streams are redirected: redirecting the file descriptors themselves breaks
     topoly's compiled extension (it then closes a descriptor it does not own).  In all our
     tests the compiled code printed nothing.
     """
-    with _LOCK:
+    with _LOCK, _keep_stdin():
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             yield
 
