@@ -127,7 +127,7 @@ def _synthetic_db(path: Path) -> Path:
     bead, tube = parse_models("bead,tube")
     with Store(path) as st:
         for knot, model, r, eps, shape, mult in [
-                ("3_1", bead, 0, 79.1, "CB", 2), ("3_1", bead, 1, 79.3, "CB", 2),
+                ("3_1", bead, 0, 79.1, "CB", 2), ("3_1", bead, 1, 79.15, "CB", 2),
                 ("3_1", tube, 0, 80.2, "CB", 2),
                 ("4_1", bead, 0, 128.4, "4C", None), ("4_1", bead, 1, 147.0, "80", None)]:
             st.put({"knot": knot, "exclusion": model.exclusion, "beads": 150,
@@ -251,7 +251,7 @@ def test_kill_9_mid_sweep_then_resume(tmp_path):
     try:
         before = _wait_rows(proc, tmp_path / "r.db", 1)
         kids = _descendants(proc.pid)
-        assert any("spawn_main" in " ".join(k.cmdline()) for k in kids), kids
+        assert kids, "no worker processes (the local cluster forks them from the sweep)"
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(30)
     finally:

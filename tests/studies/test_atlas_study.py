@@ -31,12 +31,12 @@ D = 1 / math.sqrt(2)
 
 # knot → (ε, shape, multiplicity) of its bead replicas: a fixed set with a known answer
 ROWS = {
-    "3_1": [(79.1, "CB", 2), (79.4, "CB", 2)],  # n = i: CB(2) as predicted, converged
-    "4_1": [(128.4, "4C", None), (128.9, "4C", None), (147.0, "80", None)],  # 4C, converged
+    "3_1": [(79.1, "CB", 2), (79.15, "CB", 2)],  # n = i: CB(2) as predicted, converged
+    "4_1": [(128.4, "4C", None), (128.45, "4C", None), (147.0, "80", None)],  # 4C, converged
     "5_2": [(147.3, "80", None)],  # a cage knot whose ground is the 80: a mismatch
     "6_2": [(153.0, "80", None), (160.0, "other", None)],  # 80 as predicted, not converged
     "7_4": [(190.0, "other", None)],  # in no family
-    "8_19": [(181.0, "CB", 3), (181.5, "CB", 3)],  # n = i = 3: CB(3)
+    "8_19": [(181.0, "CB", 3), (181.1, "CB", 3)],  # n = i = 3: CB(3)
 }
 
 

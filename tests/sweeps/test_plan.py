@@ -151,8 +151,9 @@ def test_starts_per_family():
 
 
 def test_convergence_rule():
-    assert is_converged({"count": 2, "epsilon": 100.0, "eps_max": 100.9})
-    assert not is_converged({"count": 2, "epsilon": 100.0, "eps_max": 101.2})
+    # the solver's rule: ε within 0.1 % (polished replicas of one state agree far better)
+    assert is_converged({"count": 2, "epsilon": 100.0, "eps_max": 100.09})
+    assert not is_converged({"count": 2, "epsilon": 100.0, "eps_max": 100.2})
     assert not is_converged({"count": 1, "epsilon": 100.0, "eps_max": 100.0})
     assert is_converged({"count": 3, "epsilon": 100.0})
     assert not is_converged(None) and not is_converged({})

@@ -120,15 +120,11 @@ def test_killed_worker_is_replaced_and_nothing_stored_twice(tmp_path):
 
 def test_sweep_on_an_existing_scheduler(tmp_path):
     """--scheduler: the client connects to a running cluster (here one started beside it)."""
-    import logging
-
-    from distributed import LocalCluster
+    from stiffknots.sweeps.cluster import local_cluster
 
     models = parse_models("tube")
     budget = budget_of("tiny", moves=50_000)
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                      dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
-                      memory_limit=0) as cluster, Store(tmp_path / "s.db") as st:
+    with local_cluster(1) as cluster, Store(tmp_path / "s.db") as st:
         res = run_sweep(["3_1"], models, budget, st, seed=1,
                         scheduler=cluster.scheduler_address)
         assert res.scheduler == cluster.scheduler_address and res.workers == 1

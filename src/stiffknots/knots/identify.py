@@ -266,6 +266,69 @@ def close_open_chain_along_z(coords, far: float | None = None) -> np.ndarray:
 def homfly_code(
     coords, closed: bool = True, *, max_cross: int = _MAX_CROSS, n_directions: int = 24
 ) -> str:
+    """topoly's code of the HOMFLY-PT polynomial of the polygon (chiral); see
+    :func:`_homfly_code` for the method.
+
+    In a process with other threads running (a Dask worker: its event loop opens and uses
+    sockets all the time) the computation runs in a forked child (:func:`_in_child`): topoly's
+    compiled code closes descriptor 0 whatever it is, and while it is closed another thread's new
+    socket takes that number — the next call then closes a live connection (seen as "Bad file
+    descriptor" in the worker's heartbeats). :func:`_keep_stdin` alone cannot close that race.
+    """
+    if _threaded():
+        return _in_child(lambda: _homfly_code(coords, closed, max_cross=max_cross,
+                                              n_directions=n_directions))
+    return _homfly_code(coords, closed, max_cross=max_cross, n_directions=n_directions)
+
+
+def _threaded() -> bool:
+    return hasattr(os, "fork") and threading.active_count() > 1
+
+
+def _in_child(fn):
+    """``fn()`` in a forked child process; its result (or exception) comes back pickled
+    through a pipe. The child runs nothing but ``fn`` and leaves by ``os._exit``."""
+    import pickle
+
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover (the child)
+        code = 0
+        try:
+            os.close(r)
+            try:
+                out = ("ok", fn())
+            except BaseException as exc:  # noqa: BLE001 — sent to the parent, raised there
+                out = ("err", exc)
+            try:
+                data = pickle.dumps(out)
+            except Exception as exc:  # noqa: BLE001
+                data = pickle.dumps(("err", IdentificationError(f"{type(exc).__name__}: {exc}")))
+            view = memoryview(data)
+            while view:
+                view = view[os.write(w, view):]
+        except BaseException:  # noqa: BLE001
+            code = 1
+        finally:
+            os._exit(code)
+    os.close(w)
+    chunks = []
+    with os.fdopen(r, "rb") as f:
+        while chunk := f.read(1 << 16):
+            chunks.append(chunk)
+    _, status = os.waitpid(pid, 0)
+    if not chunks:
+        raise IdentificationError(
+            f"the HOMFLY-PT computation died (child status {status}): topoly crashed")
+    kind, value = pickle.loads(b"".join(chunks))
+    if kind == "err":
+        raise value
+    return value
+
+
+def _homfly_code(
+    coords, closed: bool = True, *, max_cross: int = _MAX_CROSS, n_directions: int = 24
+) -> str:
     """topoly's code of the HOMFLY-PT polynomial of the polygon (chiral), e.g. for 4_1
     '[-1 0 [-1] 0 -1]|[0]|[1]'.
 

@@ -51,6 +51,37 @@ PROGRESS_PERIOD = 1.0
 
 _ADDRESS = re.compile(r"^(tcp|tls|inproc|ucx|ws|wss)://\S+$|^[\w.\-\[\]:]+:\d+$")
 
+def import_distributed():
+    """Import ``distributed`` with SnapPy hidden from its optional compressors.
+
+    ``distributed`` probes ``import snappy`` for python-snappy compression and calls
+    ``snappy.compress``; the topology package SnapPy (used by the knot naming of
+    :mod:`stiffknots.knots.identify`) has the same module name and no such function, and the
+    probe's AttributeError would abort the import. During the import the name ``snappy`` is
+    mapped to None (an ImportError for the probe), then restored.
+    """
+    import sys
+
+    if "distributed.protocol.compression" in sys.modules:
+        import distributed
+
+        return distributed
+    saved = sys.modules.get("snappy", _MISSING)
+    sys.modules["snappy"] = None
+    try:
+        import distributed
+        import distributed.protocol.compression  # noqa: F401
+    finally:
+        if saved is _MISSING:
+            del sys.modules["snappy"]
+        else:
+            sys.modules["snappy"] = saved
+    return distributed
+
+
+_MISSING = object()
+
+
 
 def local_workers(workers: int | None = None) -> int:
     """Worker processes of a local cluster: ``workers``, or one per core."""
@@ -72,6 +103,7 @@ def scheduler_address(scheduler: str) -> str:
 
 
 try:
+    import_distributed()
     from distributed.diagnostics.plugin import WorkerPlugin as _WorkerPlugin
 except ImportError:  # pragma: no cover (distributed is a dependency)
     _WorkerPlugin = object  # type: ignore[assignment,misc]
@@ -84,11 +116,33 @@ class IgnoreInterrupt(_WorkerPlugin):  # type: ignore[misc]
     name = "stiffknots-ignore-sigint"
 
     def setup(self, worker: Any) -> None:
+        import os
         import signal
         import threading
 
+        from stiffknots.problems.pool import _die_with_parent
+
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+        _die_with_parent(os.getppid())  # a killed client (or nanny) takes its workers along
+
+
+def local_cluster(n_workers: int) -> Any:
+    """A ``distributed.LocalCluster`` in this process: ``n_workers`` worker processes under
+    nannies, one thread each, HTTP on a free local port, no memory limit.
+
+    The worker processes are *forked* from this one, which has imported ``distributed``
+    safely (:func:`import_distributed`): a spawned process would import it afresh and stop on
+    SnapPy's ``snappy`` module.
+    """
+    import_distributed()
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set({"distributed.worker.multiprocessing-method": "fork"}):
+        return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                            dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
+                            scheduler_port=0, memory_limit=0)
 
 
 @contextlib.contextmanager
@@ -115,14 +169,12 @@ def connect(scheduler: str | None = None, workers: int | None = None,
     UserInputError
         A malformed address, or no scheduler answering there.
     """
-    from distributed import Client, LocalCluster
+    import_distributed()
+    from distributed import Client
 
     cluster = None
     if scheduler is None:
-        n = local_workers(workers)
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
-                               scheduler_port=0, memory_limit=0)
+        cluster = local_cluster(local_workers(workers))
         try:
             client = Client(cluster)
             client.register_plugin(IgnoreInterrupt())
@@ -179,6 +231,7 @@ def run_task(job: Any, budget: Any) -> Any:
     pjob = jobs[job.replica]
     pjob = replace(pjob, coords=pjob.coords.copy())  # the cached start stays untouched
     try:
+        import_distributed()
         from distributed import get_worker
 
         worker = get_worker()

@@ -1,11 +1,13 @@
 """When is a (knot, model) converged? One small rule, kept here so it can be swapped.
 
-For now (until the solver gives convergence verdicts of its own) the ground state of an
+The rule is the solver's (:func:`stiffknots.problems.base.verdict`): the ground state of an
 ensemble — the replicas of one knot, model, width, N and settings (:meth:`Store.states
 <stiffknots.store.sqlite.Store.states>`) — is *converged* when at least
 :data:`MIN_REPLICAS` = 2 replicas reached it (same shape class and multiplicity, §VII) with ε
-within :data:`REL_TOL` = 1 % of each other: two independent searches, usually from different
-starts, agreeing on the lowest state found. It says nothing about states no replica reached.
+within :data:`REL_TOL` = 0.1 % of each other (every replica is polished to its local minimum,
+so replicas of one state agree far better than that): two independent searches, usually from
+different starts, agreeing on the lowest state found. It says nothing about states no replica
+reached.
 """
 
 from __future__ import annotations
@@ -18,10 +20,10 @@ __all__ = ["MIN_REPLICAS", "REL_TOL", "RULE", "is_converged"]
 #: Replicas that must reach the ground state.
 MIN_REPLICAS = 2
 #: Largest relative spread of their ε, (ε_max − ε_min)/ε_min.
-REL_TOL = 0.01
+REL_TOL = 1e-3
 #: The rule in words (for reports).
 RULE = (f"ground state reached by ≥ {MIN_REPLICAS} replicas (same shape) with ε within "
-        f"{REL_TOL:.0%} of each other")
+        f"{REL_TOL:.1%} of each other")
 
 
 def is_converged(ground: Mapping[str, Any] | None) -> bool:

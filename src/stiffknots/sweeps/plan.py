@@ -55,7 +55,8 @@ def sweep_settings(model: Model, budget: Budget) -> dict[str, Any]:
     s = AnnealSettings(moves=budget.moves, schedule=for_beads(Schedule(), model.beads),
                        params=model.params())
     s.validate()
-    return {**s.as_dict(), "problem": PROBLEM, "start": START_POLICY}
+    # every replica is polished to its local minimum (problems.base.polish_run)
+    return {**s.as_dict(), "problem": PROBLEM, "start": START_POLICY, "polish": True}
 
 
 @dataclass(frozen=True)
@@ -216,8 +217,9 @@ def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
     starts = sweep_starts(k, model.beads, budget.replicas)
     problem = ClosedAnneal(k.name, beads=model.beads, moves=budget.moves,
                            replicas=budget.replicas, seed=seed, params=model.params(),
-                           start=starts)
-    mine = {key: v for key, v in settings.items() if key not in ("problem", "start")}
+                           start=starts, rounds=1, polish=settings.get("polish", True))
+    mine = {key: v for key, v in settings.items()
+            if key not in ("problem", "start", "polish")}
     if canonical_json(problem.settings.as_dict()) != canonical_json(mine):
         raise RuntimeError(f"the settings of {knot}/{model.name} differ from the sweep's key "
                            "settings; this is a bug in stiffknots, please report it")

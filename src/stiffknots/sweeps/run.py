@@ -263,6 +263,9 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         return res
 
     with connect(scheduler, workers) as client:
+        from stiffknots.sweeps.cluster import import_distributed
+
+        import_distributed()
         from distributed import as_completed
 
         threads = sum(client.nthreads().values()) or 1
