@@ -295,13 +295,16 @@ class Problem:
 
 def solve(problem: Problem, *, workers: int | None = None,
           on_replica_done: Callable[[Replica], None] | None = None,
-          on_progress: Callable[[dict], None] | None = None) -> ReplicaSet:
+          on_progress: Callable[[dict], None] | None = None,
+          isolate: bool = False) -> ReplicaSet:
     """Run every job of ``problem`` on ``workers`` processes (default: all cores) and return
     its verified replicas, best first.
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
-    "best"}`` (moves done and planned, current and lowest ε) from the workers.
+    "best"}`` (moves done and planned, current and lowest ε) from the workers. ``isolate``
+    runs even a single replica in a worker process, so that Ctrl-C stops it at once (the
+    command line does; :func:`~stiffknots.problems.pool.run_jobs`).
 
     Raises
     ------
@@ -317,7 +320,8 @@ def solve(problem: Problem, *, workers: int | None = None,
         if on_replica_done is not None:
             on_replica_done(r)
 
-    results, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress)
+    results, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress,
+                                    isolate=isolate)
     results.sort(key=problem.sort_key)
     bad = [r for r in results if not r.knot_verified]
     if bad:

@@ -78,8 +78,13 @@ def _drain(q, on_progress: Callable[[dict], None]) -> None:
 
 def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
              on_done: Callable[[Any], None] | None = None,
-             on_progress: Callable[[dict], None] | None = None) -> tuple[list[Any], bool]:
+             on_progress: Callable[[dict], None] | None = None,
+             isolate: bool = False) -> tuple[list[Any], bool]:
     """Run ``job(*args)`` for every ``args`` in ``arg_list`` on ``workers`` processes.
+
+    One worker (or one job) runs in this process, unless ``isolate``: then it runs in a worker
+    process too, so that Ctrl-C stops it at once — in this process a compiled kernel sees
+    Ctrl-C only when its chunk of moves ends (minutes for a large number of moves).
 
     Returns
     -------
@@ -89,7 +94,7 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
     """
     global _PROGRESS
     results: list[Any] = []
-    if workers <= 1 or len(arg_list) <= 1:
+    if not isolate and (workers <= 1 or len(arg_list) <= 1):
         _PROGRESS = on_progress
         try:
             for args in arg_list:
@@ -104,7 +109,8 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
         return results, False
     ctx = mp.get_context("spawn")
     q = ctx.Queue() if on_progress is not None else None
-    ex = ProcessPoolExecutor(max_workers=min(workers, len(arg_list)), mp_context=ctx,
+    nproc = max(1, min(workers, len(arg_list)))
+    ex = ProcessPoolExecutor(max_workers=nproc, mp_context=ctx,
                              initializer=_worker_init, initargs=(os.getpid(), q))
     interrupted = False
     try:
