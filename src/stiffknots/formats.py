@@ -130,15 +130,38 @@ def from_xyz(path: PathLike, closed: bool | None = None, meta: dict | None = Non
     first line with the count, optionally followed by a non-numeric title line as in its LAMMPS
     variant). Blank lines and ``#`` comments are skipped.
 
+    A cut or damaged file must not read as another chain. The rule:
+
+    * a KymoKnot count line must equal the number of bead lines (ChainFormatError);
+    * nxyz indices must count up by one from the first (a missing or swapped line is a
+      ChainFormatError); a closing line repeats the first index;
+    * a file that does not end with a newline may have lost the end of its last line: it is
+      read, with a :class:`~stiffknots.errors.ChainFormatWarning`;
+    * the closure: a file whose last bead repeats the first is a closed chain. A plain or nxyz
+      file without that repeated bead cannot tell an open chain from a closed one written
+      without it, or from a closed chain that lost its last lines: unless ``closed`` is given,
+      it is read as open with a ChainFormatWarning saying so (a KymoKnot file with a count is
+      complete, and KymoKnot's convention — linear chains do not repeat — decides silently).
+      The chain's ``meta["closure"]`` (default metadata) records which closure was taken and
+      why.
+
     Parameters
     ----------
     closed : bool, optional
         ``None`` (default): the chain is closed iff the last bead repeats the first (which is then
         dropped). ``True``/``False`` force it; with ``True`` a repeated closing bead is dropped.
     meta : dict, optional
-        Metadata for the chain (the format stores none); ``{"source": path}`` by default.
+        Metadata for the chain (the format stores none); ``{"source": path, "closure": ...}``
+        by default.
     """
+    import warnings
+
+    from stiffknots.errors import ChainFormatWarning
+
     text = _read_text(path)
+    if text.strip() and not text.endswith(("\n", "\r")):
+        warnings.warn(f"{path}: the file does not end with a newline; its last line may be cut",
+                      ChainFormatWarning, stacklevel=2)
     lines = [ln.strip() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln and not ln.startswith("#")]
     if not lines:
@@ -156,6 +179,7 @@ def from_xyz(path: PathLike, closed: bool | None = None, meta: dict | None = Non
         if lines and not _is_number(lines[0].split()[0]):
             lines = lines[1:]  # KymoKnot/LAMMPS title line
     rows = []
+    index = []
     ncol = None
     for k, ln in enumerate(lines):
         tok = ln.split()
@@ -177,7 +201,7 @@ def from_xyz(path: PathLike, closed: bool | None = None, meta: dict | None = Non
             )
         try:
             if ncol == 4:
-                int(tok[0])
+                index.append(int(tok[0]))
             rows.append([float(v) for v in tok[ncol - 3 :]])
         except ValueError:
             raise ChainFormatError(f"{path}: bead line {k + 1} {ln!r} is not numeric") from None
@@ -192,10 +216,41 @@ def from_xyz(path: PathLike, closed: bool | None = None, meta: dict | None = Non
     if not np.all(np.isfinite(x)):
         raise ChainFormatError(f"{path}: non-finite coordinates")
     repeated = len(x) >= 2 and _ends_coincide(x)
-    is_closed = repeated if closed is None else bool(closed)
+    _check_indices(path, index, repeated)
+    if closed is not None:
+        is_closed, why = bool(closed), "given"
+    elif repeated:
+        is_closed, why = True, "the last bead repeats the first"
+    elif count is not None:
+        is_closed, why = False, "KymoKnot file whose last bead does not repeat the first"
+    else:
+        is_closed, why = False, "assumed: the last bead does not repeat the first"
+        import warnings
+
+        from stiffknots.errors import ChainFormatWarning
+
+        warnings.warn(f"{path}: read as an open chain of {len(x)} beads, since its last bead "
+                      "does not repeat the first; a closed chain written without the repeated "
+                      "bead, or one that lost its last lines, reads the same: pass closed=True "
+                      "or closed=False to say which", ChainFormatWarning, stacklevel=2)
     if is_closed and repeated:
         x = x[:-1]
-    return _make_chain(x, is_closed, {"source": os.fspath(path)} if meta is None else meta, path)
+    if meta is None:
+        meta = {"source": os.fspath(path),
+                "closure": f"{'closed' if is_closed else 'open'} ({why})"}
+    return _make_chain(x, is_closed, meta, path)
+
+
+def _check_indices(path: PathLike, index: list[int], repeated: bool) -> None:
+    """nxyz indices count up by one from the first; a closing line repeats the first."""
+    if not index:
+        return
+    body = index[:-1] if repeated and len(index) >= 2 and index[-1] == index[0] else index
+    for k, i in enumerate(body):
+        if i != body[0] + k:
+            raise ChainFormatError(
+                f"{path}: bead line {k + 1} has index {i}, expected {body[0] + k} (the indices "
+                "must count up by one: a line is missing or out of order)")
 
 
 def _is_number(s: str) -> bool:
