@@ -17,6 +17,7 @@ from stiffknots.cli.app import (
     OverwriteOpt,
     ReplicaProgress,
     ReplicasOpt,
+    ResultsFolder,
     ResumeOpt,
     SeedOpt,
     StartOpt,
@@ -24,13 +25,14 @@ from stiffknots.cli.app import (
     check_interrupted,
     choice,
     claim_checkpoint,
+    count,
     dump,
     finish,
     fmt,
     out,
     prepare_out,
+    tube_only,
     width_of,
-    write_manifest,
 )
 
 
@@ -42,21 +44,24 @@ def shape_of(coords, params):
 
 
 def save_results(res, out_dir: Path, title: str, command: str) -> dict:
-    """``res.save`` plus a picture of the best chain and the manifest (written last)."""
+    """``res.save`` plus a picture of the best chain, the manifest written last; on Ctrl-C or
+    an error none of it stays (:class:`ResultsFolder`)."""
     from stiffknots.report.render import save_chain_png
 
-    paths = res.save(out_dir)
-    png = save_chain_png(res.best.coords, out_dir / "best.png", closed=res.closed, title=title)
-    files = {k: str(v) for k, v in paths.items()} | {"png": str(png)}
-    write_manifest(out_dir, files, command)
-    return files
+    with ResultsFolder(out_dir, command):
+        paths = res.save(out_dir)
+        png = save_chain_png(res.best.coords, out_dir / "best.png", closed=res.closed,
+                             title=title)
+    return {k: str(v) for k, v in paths.items()} | {"png": str(png)}
 
 
 def anneal(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
-    beads: Annotated[int, typer.Option(help="Number of beads N (bond length 1).")] = 150,
+    beads: Annotated[int, typer.Option(help="Number of beads N (bond length 1).",
+                                       parser=count)] = 150,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica (default: 30,000,000).")] = None,
+        help="Attempted moves per replica (default: 30,000,000; 3e7 works too).",
+        parser=count)] = None,
     replicas: ReplicasOpt = 2,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper, d=1/√2) or tube.")] = "bead",
@@ -87,13 +92,20 @@ def anneal(
     from stiffknots.engine.params import MoveParams
     from stiffknots.engine.schedules import SCHEDULES, Schedule
     from stiffknots.knots.starts import STARTS
+    from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
     from stiffknots.problems.closed import DEFAULT_MOVES, ClosedAnneal
 
     moves = DEFAULT_MOVES if moves is None else moves
+    beads, moves = V.beads(beads), V.moves(moves)
+    replicas, seed = V.replicas(replicas), V.seed(seed)
     choice("--start", start, ("all", *STARTS))
     choice("--exclusion", exclusion, ("bead", "tube"))
     choice("--schedule", schedule, SCHEDULES)
+    tube_only(w, exclusion)
+    if schedule == "tempering" and relax_fraction is not None:
+        raise UserError("--relax-fraction applies to the power and geometric schedules "
+                        "(tempering has no relaxation stage)")
     given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
     sch = replace(Schedule(), kind=schedule, **{k: v for k, v in given.items() if v is not None})
     params = replace(MoveParams(), exclusion=exclusion, delta=delta,
@@ -108,8 +120,10 @@ def anneal(
     problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
                            resume=resume, start=start)
+    if resume:
+        V.checkpoints(problem.jobs())  # a corrupt or foreign checkpoint: exit 2 before any work
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas, disable=json_) as bars:
-        res = solve(problem, on_replica_done=bars.done, on_progress=bars)
+        res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None
     check_interrupted(res, hint)
     width = width_of(params, beads)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import typer
 
 from stiffknots.cli import anneal, catalogue, open, studies, tightest
-from stiffknots.cli.app import Interrupted, app, err
+from stiffknots.cli.app import Interrupted, app, err, release_folders
 from stiffknots.errors import InvalidParameter, UserInputError
 
 # the commands, in the order `stiffknots --help` lists them
@@ -30,33 +30,54 @@ def option_name(param: str) -> str:
     return OPTION_NAMES.get(param, "--" + param.replace("_", "-"))
 
 
+def _say(text: str) -> None:
+    err.print(text, highlight=False, markup=False, soft_wrap=True)
+
+
+def _usage_line(e) -> str:
+    """A click usage error (bad value, unknown option, missing argument) as one line."""
+    msg = " ".join(str(e.format_message()).split())
+    ctx = getattr(e, "ctx", None)
+    where = getattr(ctx, "command_path", None) or "stiffknots"
+    return f"error: {msg} (see {where} --help)"
+
+
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
     try:
+        _main()
+    except SystemExit as e:
+        if e.code not in (0, None):
+            release_folders()  # a folder the failed command created and left empty
+        raise
+
+
+def _main() -> None:
+    try:
         rc = app(standalone_mode=False)
     except InvalidParameter as e:
-        err.print(f"error: {e.for_option(option_name(e.param))}", highlight=False, markup=False,
-                  soft_wrap=True)
+        _say(f"error: {e.for_option(option_name(e.param))}")
         raise SystemExit(2) from None
     except (UserInputError, ValueError) as e:
         # ValueError: parameter validation of the engine; one line whatever the width
-        err.print(f"error: {e}", highlight=False, markup=False, soft_wrap=True)
+        _say(f"error: {' '.join(str(e).split())}")
         raise SystemExit(2) from None
     except Interrupted as e:
-        err.print(str(e), highlight=False, markup=False, soft_wrap=True)
+        _say(str(e))
         raise SystemExit(130) from None
-    except typer.Abort:
-        err.print("interrupted", highlight=False, markup=False)
-        raise SystemExit(130) from None
-    except KeyboardInterrupt:
-        err.print("interrupted", highlight=False, markup=False)
+    except (typer.Abort, KeyboardInterrupt):
+        _say("interrupted")
         raise SystemExit(130) from None
     except Exception as e:  # click usage errors (typer vendors click: no import of it here)
         if callable(getattr(e, "show", None)) and isinstance(getattr(e, "exit_code", None), int):
-            e.show()
+            if type(e).__name__ == "NoArgsIsHelpError" or not callable(
+                    getattr(e, "format_message", None)):
+                e.show()  # `stiffknots` alone: the help
+            else:
+                _say(_usage_line(e))
             raise SystemExit(e.exit_code) from None
         raise
     if isinstance(rc, int) and rc != 0:
         if rc == 130:
-            err.print("interrupted", highlight=False, markup=False)
+            _say("interrupted")
         raise SystemExit(rc)
