@@ -3,7 +3,8 @@ progress.
 
 A job is a picklable top-level function; each call returns one result. Guarantees:
 
-* **Ctrl-C** reaches the parent only (the workers ignore SIGINT): the finished results are kept,
+* **Ctrl-C** reaches the parent only (the workers ignore SIGINT, and hold it blocked from their
+  very start until they ignore it): the finished results are kept,
   the running workers are terminated at once (no traceback from a worker, no CPU left
   burning), and the caller learns that the run was interrupted.
 * **The parent killed** (``kill -9``): every worker asks the kernel to kill it when its parent
@@ -59,9 +60,30 @@ def _die_with_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True).start()
 
 
+@contextlib.contextmanager
+def _ctrl_c_held():
+    """Hold Ctrl-C back (SIGINT blocked in this thread) while worker processes are spawned.
+
+    The workers inherit the blocked signal, so that a Ctrl-C to the process group cannot reach
+    a worker before its initializer ignores it (a worker still importing printed a
+    KeyboardInterrupt traceback); a Ctrl-C meanwhile is delivered here afterwards, not lost.
+    CPython's resource tracker starts the same way.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def _worker_init(parent: int, progress_queue) -> None:
     global _PROGRESS
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+    if hasattr(signal, "pthread_sigmask"):  # blocked since the spawn (_ctrl_c_held)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     _die_with_parent(parent)
     if progress_queue is not None:
         _PROGRESS = progress_queue.put
@@ -114,7 +136,8 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
                              initializer=_worker_init, initargs=(os.getpid(), q))
     interrupted = False
     try:
-        pending = {ex.submit(job, *args) for args in arg_list}
+        with _ctrl_c_held():  # the workers are spawned here, by submit
+            pending = {ex.submit(job, *args) for args in arg_list}
         while pending:
             done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
             if q is not None:
