@@ -73,9 +73,10 @@ ResumeOpt = Annotated[bool, typer.Option(
 MANIFEST = "manifest.json"
 RESULT_FILES = ("manifest.json", "result.json", "summary.json", "report.md")
 #: what a run writes into its folder: a folder holding any of these (without a manifest: a run
-#: killed while writing) holds another run's files; ``--overwrite`` removes them
+#: killed while writing, maybe in the middle of a temporary file) holds another run's files;
+#: ``--overwrite`` removes them
 RUN_FILES = (*RESULT_FILES, "report.html", "best.xyz", "best.json", "best.png", "traces.npz",
-             "replica_*.xyz", "tension.png", "Le_*", "F_*")
+             "replica_*.xyz", "tension.png", "Le_*", "F_*", ".*.tmp")
 
 
 class UserError(UserInputError):

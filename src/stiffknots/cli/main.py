@@ -7,7 +7,7 @@ import typer
 
 from stiffknots.cli import anneal, catalogue, open, studies, tightest
 from stiffknots.cli.app import Interrupted, app, err, release_folders
-from stiffknots.errors import InvalidParameter, UserInputError
+from stiffknots.errors import InvalidParameter, UserInputError, WorkerError
 
 # the commands, in the order `stiffknots --help` lists them
 for _name, _command in (
@@ -65,6 +65,9 @@ def _main() -> None:
     except Interrupted as e:
         _say(str(e))
         raise SystemExit(130) from None
+    except WorkerError as e:  # the machine's doing (out of memory, a kill), not a bug: one line
+        _say(f"error: {e}")
+        raise SystemExit(1) from None
     except (typer.Abort, KeyboardInterrupt):
         _say("interrupted")
         raise SystemExit(130) from None
