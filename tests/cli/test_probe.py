@@ -273,11 +273,17 @@ def test_every_option_of_every_command_is_probed():
     assert not missing, f"options without a probe case: {missing}"
 
 
-def test_resume_check_happens_before_any_work(tmp_path):
-    """validate.checkpoints: the parent reads every checkpoint before the workers start."""
+def test_resume_check_happens_before_any_work(tmp_path, monkeypatch):
+    """validate.checkpoints: solve reads every checkpoint before the workers start."""
     from stiffknots.errors import CheckpointError
+    from stiffknots.problems import base
     from stiffknots.problems import validate as V
     from stiffknots.problems.closed import ClosedAnneal
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the replicas started")
+
+    monkeypatch.setattr(base, "run_jobs", no_work)
 
     ck = tmp_path / "ck"
     ck.mkdir()
@@ -286,7 +292,7 @@ def test_resume_check_happens_before_any_work(tmp_path):
     for data in CHECKPOINTS.values():
         (ck / "replica_1.ckpt.npz").write_bytes(data)
         with pytest.raises(CheckpointError, match=r"corrupt checkpoint .*replica_1\.ckpt\.npz"):
-            V.checkpoints(problem.jobs())
+            base.solve(problem)
     (ck / "replica_1.ckpt.npz").unlink()
     # a checkpoint of another run: refused before any work too
     from stiffknots.engine.driver import run_meta, save_checkpoint
@@ -295,4 +301,4 @@ def test_resume_check_happens_before_any_work(tmp_path):
     meta = run_meta("anneal", job.settings, job.seed + 1, job.replica, job.coords)
     save_checkpoint(ck / "replica_1.ckpt.npz", {"pos": np.zeros((3, 3))}, meta)
     with pytest.raises(CheckpointError, match="different run .*seed differs"):
-        V.checkpoints(problem.jobs())
+        base.solve(problem)

@@ -120,8 +120,6 @@ def anneal(
     problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
                            resume=resume, start=start)
-    if resume:
-        V.checkpoints(problem.jobs())  # a corrupt or foreign checkpoint: exit 2 before any work
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas, disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None

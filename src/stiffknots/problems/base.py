@@ -308,10 +308,13 @@ def solve(problem: Problem, *, workers: int | None = None,
 
     Raises
     ------
+    CheckpointError
+        Before any work, if a job resumes from a corrupt checkpoint or one of another run.
     TopologyChangedError
         If a replica ends with another knot type (never expected: a bug, never a data point).
     """
     jobs = problem.jobs()
+    V.checkpoints(jobs)  # a corrupt or foreign checkpoint to resume: CheckpointError now
     nw = workers or default_workers(len(jobs))
     t0 = time.perf_counter()
 
