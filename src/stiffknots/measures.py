@@ -232,9 +232,9 @@ def chain_report(coords: np.ndarray, closed: bool, d: float = BEAD_D, bond_tol: 
     rule = not dmin < d * (1.0 - 1e-9)
     problems = []
     if not ok_bonds:
-        what = "unit bonds: |b − 1|" if unit is not None else (
-            f"equal bonds: |b/b̄ − 1|, mean b̄ = {u:.6g}")
-        problems.append(f"bond {worst} has length {bonds[worst]:.6g} ({what} ≤ {bond_tol:g})")
+        what = (f"unit bonds: |b − 1| ≤ {bond_tol:g}" if unit is not None else
+                f"equal bonds: |b/b̄ − 1| ≤ {bond_tol:g}, mean b̄ = {u:.6g}")
+        problems.append(f"bond {worst} has length {bonds[worst]:.6g} ({what})")
     if not rule:
         problems.append(f"two beads at index distance ≥ 2 are {dmin:.6g} apart (the bead rule "
                         f"needs ≥ {d:.6g})")
