@@ -10,6 +10,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev]'
+	$(PY) -m stiffknots.studies.warmup  # compile the numba kernels once
 	touch $(STAMP)
 
 run: $(STAMP)  ## the main job on a small default budget

@@ -1,14 +1,13 @@
 """Tests of stiffknots.formats: exact round trips, dialects, topoly, OBJ import, corrupt files."""
 
 import json
-import warnings
 
 import numpy as np
 import pytest
 
 from helpers import trefoil
 from stiffknots.chain import Chain, regular_polygon
-from stiffknots.errors import ChainFormatError, ChainFormatWarning
+from stiffknots.errors import ChainFormatError
 from stiffknots.formats import (
     from_json,
     from_npz,
@@ -39,12 +38,12 @@ def _sample_chains():
     ]
 
 
-@pytest.mark.parametrize("suffix", [".xyz", ".json", ".npz", ".obj"])
+@pytest.mark.parametrize("suffix", [".xyz", ".json", ".npz", ".obj", ".vect"])
 def test_round_trips_exact(tmp_path, suffix):
     for k, c in enumerate(_sample_chains()):
         p = tmp_path / f"c{k}{suffix}"
         save(c, p)
-        # an open chain in xyz has no marker of its closure: say it (see the closure rule)
+        # xyz records closure only by repeating the first vertex: an open chain needs closed=False
         d = load(p, closed=False) if suffix == ".xyz" and not c.closed else load(p)
         assert d.closed == c.closed
         assert d.coords.shape == c.coords.shape
@@ -70,57 +69,19 @@ def test_xyz_dialects(tmp_path):
     # open chain, plain "x y z" lines and a KymoKnot LAMMPS-style title line
     o = Chain(trefoil(20)[:9], closed=False)
     to_xyz(o, tmp_path / "o.xyz", dialect="kymoknot")
-    assert not from_xyz(tmp_path / "o.xyz").closed
+    assert not from_xyz(tmp_path / "o.xyz", closed=False).closed
+    # the file does not say: assumed closed (a ring never silently becomes an open chain)
+    d = from_xyz(tmp_path / "o.xyz")
+    assert d.closed and d.meta["closure"].startswith("assumed closed")
     body = "\n".join(" ".join(repr(float(v)) for v in p) for p in o.coords)
     (tmp_path / "plain.xyz").write_text(body + "\n")
-    with pytest.warns(ChainFormatWarning, match="read as an open chain"):
-        assert np.array_equal(from_xyz(tmp_path / "plain.xyz").coords, o.coords)
+    assert np.array_equal(from_xyz(tmp_path / "plain.xyz").coords, o.coords)
     (tmp_path / "lammps.xyz").write_text("9\nTimestep 0 some words\n" + body + "\n")
     assert np.array_equal(from_xyz(tmp_path / "lammps.xyz").coords, o.coords)
     assert from_xyz(tmp_path / "plain.xyz", closed=True).closed
+    assert not from_xyz(tmp_path / "plain.xyz", closed=False).closed
     with pytest.raises(ValueError, match="dialect"):
         to_xyz(o, tmp_path / "x.xyz", dialect="pdb")
-
-
-def test_xyz_cut_file_is_never_silently_another_chain(tmp_path):
-    """The rule of from_xyz: a count must match, nxyz indices count up by one, a missing final
-    newline and an assumed open closure are warned about, and meta says which closure."""
-    c = Chain(trefoil(30))
-    to_xyz(c, tmp_path / "t.xyz")
-    full = (tmp_path / "t.xyz").read_text().splitlines(keepends=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # the complete file: no warning at all
-        d = from_xyz(tmp_path / "t.xyz")
-    assert d.closed and d.meta["closure"].startswith("closed (the last bead repeats")
-    # a closed chain that lost its last lines reads as an open chain — but not silently
-    (tmp_path / "cut.xyz").write_text("".join(full[:20]))
-    with pytest.warns(ChainFormatWarning, match="open chain of 20 beads"):
-        d = from_xyz(tmp_path / "cut.xyz")
-    assert not d.closed and d.meta["closure"].startswith("open (assumed")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # the closure given: nothing is assumed
-        assert from_xyz(tmp_path / "cut.xyz", closed=False).meta["closure"] == "open (given)"
-    # a line lost in the middle, or two lines swapped: the indices tell
-    (tmp_path / "hole.xyz").write_text("".join(full[:10] + full[11:]))
-    with pytest.raises(ChainFormatError, match="line 11 has index 12, expected 11"):
-        from_xyz(tmp_path / "hole.xyz")
-    (tmp_path / "swap.xyz").write_text("".join(full[:5] + [full[6], full[5]] + full[7:]))
-    with pytest.raises(ChainFormatError, match="out of order"):
-        from_xyz(tmp_path / "swap.xyz")
-    # cut in the middle of a number: the last line parses, but the file says it may be cut
-    (tmp_path / "mid.xyz").write_text("".join(full)[:-2])
-    with pytest.warns(ChainFormatWarning, match="does not end with a newline"):
-        from_xyz(tmp_path / "mid.xyz")
-    # KymoKnot: the count proves the file complete, so its convention decides silently
-    o = Chain(trefoil(30)[:12], closed=False)
-    to_xyz(o, tmp_path / "k.xyz", dialect="kymoknot")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        assert not from_xyz(tmp_path / "k.xyz").closed
-    lines = (tmp_path / "k.xyz").read_text().splitlines(keepends=True)
-    (tmp_path / "kcut.xyz").write_text("".join(lines[:-3]))
-    with pytest.raises(ChainFormatError, match="announces 12 beads but 9"):
-        from_xyz(tmp_path / "kcut.xyz")
 
 
 def test_xyz_readable_by_topoly(tmp_path):
@@ -226,3 +187,25 @@ def test_json_layout(tmp_path):
     to_npz(c, tmp_path / "c.bin")  # no suffix appended
     assert from_npz(tmp_path / "c.bin").meta == {"knot": "0_1"}
     assert from_json(tmp_path / "c.json").meta == {"knot": "0_1"}
+
+
+def test_nxyz_index_catches_a_lost_or_moved_line(tmp_path):
+    """A line lost or moved inside an nxyz file is an error naming the line, not another
+    chain read silently (the index column must count up by one)."""
+    c = Chain(trefoil(30))
+    to_xyz(c, tmp_path / "t.xyz")
+    full = (tmp_path / "t.xyz").read_text().splitlines(keepends=True)
+    assert np.array_equal(from_xyz(tmp_path / "t.xyz").coords, c.coords)
+    (tmp_path / "hole.xyz").write_text("".join(full[:10] + full[11:]))
+    with pytest.raises(ChainFormatError, match=r"line 11: index 12, expected 11 .*missing"):
+        from_xyz(tmp_path / "hole.xyz")
+    (tmp_path / "swap.xyz").write_text("".join(full[:5] + [full[6], full[5]] + full[7:]))
+    with pytest.raises(ChainFormatError, match="out of order"):
+        from_xyz(tmp_path / "swap.xyz")
+    # a file that starts at index 0 (another writer) is fine, and so is a cut tail: the
+    # closure rule then assumes a closed chain and says so
+    (tmp_path / "zero.xyz").write_text("".join(f"{k} {ln.split(' ', 1)[1]}"
+                                               for k, ln in enumerate(full[:-1])))
+    assert from_xyz(tmp_path / "zero.xyz").n_beads == 30
+    (tmp_path / "cut.xyz").write_text("".join(full[:20]))
+    assert from_xyz(tmp_path / "cut.xyz").meta["closure"].startswith("assumed closed")

@@ -5,10 +5,10 @@ and whether it is closed (bead ``N-1`` joined to bead ``0``, so ``N`` bonds) or 
 bonds). Its methods compute the quantities of Gallotti & Pierre-Louis, "Stiff knots" (PRE 2007):
 
 * the discrete bending energy of §VII, ``E_d = C Σ_n (1 - u_n·u_{n+1})`` (unit bonds), which
-  tends to the continuum energy ``E = (C/2) ∫ κ² ds`` (eq. (1)) for smooth curves;
-* the normalised energy ``ε = E L / C`` (eq. (3)), ``ε = E_d N / C`` for unit bonds;
-* the total curvature ``κ̄ = ∫ κ ds``, bounded below by ``2πn`` (Milnor, §IV);
-* the excess length ``L_e = ∫ ds - ∫ dz`` of an open knot (§VIII);
+  tends to the continuum energy ``E = (C/2) ∫ κ² ds`` (eq. (2)) for smooth curves;
+* the normalised energy ``ε = E L / C`` (eq. (11)), ``ε = E_d N / C`` for unit bonds;
+* the total curvature ``κ̄ = ∫ κ ds`` (eq. (10)), bounded below by ``2πn`` (Milnor, eq. (9));
+* the excess length ``L_e = ∫ ds - ∫ dz`` of an open knot (eq. (40), §VIII);
 * geometric diagnostics: radius of gyration, writhe (exact, Klenin & Langowski 2000), minimum
   distances between beads and between non-adjacent segments (the tube/bead exclusion of §II and
   §VII).
@@ -134,7 +134,7 @@ class Chain:
 
     @property
     def length(self) -> float:
-        """Contour length ``L = ∫ ds`` (eq. e:length): sum of bond lengths (``= N`` for a closed
+        """Contour length ``L = ∫ ds`` (eq. (1)): sum of bond lengths (``= N`` for a closed
         unit-bond chain)."""
         return float(np.sum(self.bond_lengths()))
 
@@ -151,14 +151,14 @@ class Chain:
         interior vertices of an open chain. For bonds of arbitrary length ``b`` each vertex
         term is divided by the mean length ``b̄`` of its two bonds,
         ``E = C Σ (1 - u_a·u_b) / b̄``; since ``1 - cos θ ≈ θ²/2`` and ``θ ≈ κ b̄``, this tends to
-        the continuum energy ``(C/2) ∫ κ² ds`` (eq. e:E) for smooth curves, and equals ``E_d``
+        the continuum energy ``(C/2) ∫ κ² ds`` (eq. (2)) for smooth curves, and equals ``E_d``
         when all bonds are 1 (the weight is then ``1``).
         """
         _check_C(C)
         return float(C * M.bending_energy(self.coords, self.closed))
 
     def epsilon(self, C: float = 1.0) -> float:
-        """Normalised energy ``ε = E L / C`` (eq. e:epsilon); ``ε = E_d N / C`` for a closed
+        """Normalised energy ``ε = E L / C`` (eq. (11)); ``ε = E_d N / C`` for a closed
         unit-bond chain (§VII). Independent of ``C`` and of the chain's scale."""
         _check_C(C)
         return self.energy(C) * self.length / C
@@ -175,16 +175,16 @@ class Chain:
         """Discrete curvature at each bending vertex: ``κ_i = θ_i / b̄_i``, turning angle over the
         mean length of the two adjacent bonds (same vertices as :meth:`turning_angles`).
 
-        With this choice ``Σ κ_i b̄_i`` is exactly the total curvature (eq. e:total_curv); for a
+        With this choice ``Σ κ_i b̄_i`` is exactly the total curvature (eq. (10)); for a
         regular polygon inscribed in a circle of radius ``R`` it tends to ``1/R``.
         """
         theta, _, lbar = M.vertex_terms(self.coords, self.closed)
         return theta / lbar
 
     def total_curvature(self) -> float:
-        """Total curvature ``κ̄ = ∫ κ ds`` (eq. e:total_curv) = ``Σ θ_i`` for a polygon.
+        """Total curvature ``κ̄ = ∫ κ ds`` (eq. (10)) = ``Σ θ_i`` for a polygon.
 
-        Milnor (eq. e:bridge_k): ``κ̄ ≥ 2πn`` for a knot of bridge number ``n`` (Fáry–Milnor for
+        Milnor (eq. (9)): ``κ̄ ≥ 2πn`` for a knot of bridge number ``n`` (Fáry–Milnor for
         polygons too); ``= 2π`` for a convex planar polygon.
         """
         return float(np.sum(self.turning_angles()))
@@ -228,7 +228,7 @@ class Chain:
         return float(M.min_segment_distance(self.coords, self.closed))
 
     def excess_length(self, axis: Any = (0.0, 0.0, 1.0)) -> float:
-        """Excess length ``L_e = ∫ ds - ∫ dz`` (eq. e:excess_length) along ``axis``.
+        """Excess length ``L_e = ∫ ds - ∫ dz`` (eq. (40)) along ``axis``.
 
         Contour length minus the signed projection of the end-to-end vector
         ``r_{N-1} - r_0`` on the unit vector ``axis`` (the direction of the straight ends of an
@@ -310,7 +310,7 @@ def regular_polygon(n: int, m: int = 1, amplitude: float | None = None) -> Chain
     ``m = 1``: the planar regular ``n``-gon of circumradius ``R = 1/(2 sin(π/n))``; its
     normalised energy is ``ε = n²(1 - cos(2π/n)) → 2π²`` (the circle, §III).
 
-    ``m ≥ 2``: the circular braid of index ``m`` (§V, eq. e:epsilon*_CB, ``ε → 2π²m²``). The
+    ``m ≥ 2``: the circular braid of index ``m`` (§V, eq. (30), ``ε → 2π²m²``). The
     centre line winds ``m`` times around the ``z`` axis while going once around a thin torus
     tube of radius ``amplitude`` (a ``(m, 1)`` torus curve, an unknot), so the covers never
     touch: two covers at the same azimuth are ``2·amplitude·sin(π/m)`` apart. The beads are

@@ -16,9 +16,8 @@ Two branches matter to a caller:
 its checkpoint.
 
 Warnings (:class:`StiffKnotsWarning`, a ``UserWarning``) flag input that can be used but may not
-be what the user meant: :class:`ChainFormatWarning` (a chain file whose closure had to be
-assumed, or whose last line may be cut) and :class:`ChainWarning` (a chain that is not a
-unit-bond chain obeying the bead rule, given to an analysis that assumes one).
+be what the user meant: :class:`ChainWarning` (a chain that is not a unit-bond chain obeying the
+bead rule, given to an analysis that assumes one).
 """
 
 from __future__ import annotations
@@ -27,7 +26,6 @@ from typing import Any
 
 __all__ = [
     "ChainFormatError",
-    "ChainFormatWarning",
     "ChainGeometryError",
     "ChainWarning",
     "CheckpointError",
@@ -147,11 +145,6 @@ class RunStopped(StiffKnotsError):  # noqa: N818 (not an error: a requested stop
 
 class StiffKnotsWarning(UserWarning):
     """Base class of the warnings stiffknots issues on purpose."""
-
-
-class ChainFormatWarning(StiffKnotsWarning):
-    """A chain file read with an assumption: its closure (no repeated first bead, no closure
-    given) or a last line that may be cut (no final newline)."""
 
 
 class ChainWarning(StiffKnotsWarning):

@@ -1,6 +1,41 @@
 """Chain file formats: every reader and writer (:func:`save` / :func:`load` dispatch on the
 suffix).
 
+==================  =====================================  ====================  ===========
+suffix              what it holds                          closure recorded by   written
+==================  =====================================  ====================  ===========
+``.xyz``            vertex lines (topoly nxyz, KymoKnot,   a repeated first      yes (two
+                    plain, molecular ``C x y z``)          vertex only           dialects)
+``.txt`` ``.dat``   ``x y z`` table, white-space, tab or   a repeated first      no
+``.tsv`` ``.csv``   comma separated, optional header       vertex only
+``.json``           ``stiffknots-chain`` (or a bare list   ``"closed"``          yes
+                    of ``[x, y, z]``)                      (bare list: repeat)
+``.npz`` ``.npy``   ``coords`` [+ ``closed``, ``meta``];   ``closed`` (``.npy``: yes (``.npz``)
+                    ``.npy``: one (N, 3) array             repeat only)
+``.obj``            ElasticKnots polyline (``v``, ``l``)   a loop of ``l``       yes
+                                                           elements
+``.vect``           Geomview VECT, one polyline            the sign of the       yes
+                    (KnotPlot, ridgerunner)                vertex count
+==================  =====================================  ====================  ===========
+
+The closure rule
+----------------
+Every reader takes ``closed`` (``True``/``False``/``None``). ``True`` or ``False`` is obeyed (a
+repeated closing vertex is then dropped for a closed chain). With ``None`` (the default):
+
+1. a file whose last vertex repeats the first is closed, the repeat dropped (except that the
+   explicit ``closed`` flag of the stiffknots ``.json``/``.npz`` formats always wins);
+2. a format that records closure is obeyed: VECT's negative vertex count, an OBJ loop, the
+   ``closed`` flag of ``.json``/``.npz``;
+3. otherwise (plain vertex lists that do not repeat) the chain is **assumed closed** — a knot:
+   a ring must never silently become an open chain (its closing bond and two bending terms
+   would be lost).
+
+Each reader records what was decided in ``chain.meta["closure"]``, one sentence starting with
+``closed:``, ``open:`` or ``assumed closed:`` (the command line prints it), except where the
+stiffknots ``.json``/``.npz`` flag is obeyed: their metadata round-trips exactly, and
+:func:`closure_note` gives the sentence for any chain read by this module.
+
 ``.xyz``
     Plain text, one bead per line. Two dialects are written (and both, plus plain ``x y z``
     lines, are read):
@@ -14,24 +49,35 @@ suffix).
       follow, then ``"x y z"`` lines separated by single spaces (KymoKnot tokenises on ``' '``
       only and refuses a fourth column). A ring repeats its first bead at the end (KymoKnot's
       ``KymoKnot_ring.x`` requires first and last lines to coincide; ``KymoKnot_linear.x``
-      requires them to differ).
+      requires them to differ). A count that disagrees with the number of lines is an error.
 
     No single file satisfies both readers (topoly would read KymoKnot's count line as a bead,
     KymoKnot rejects the index column), hence the two dialects. Floats are written with
     ``repr`` (shortest round-trip representation), so coordinates survive a round trip exactly.
-    The xyz formats store no metadata; use ``.json`` or ``.npz`` for that.
+    The xyz formats store no metadata; use ``.json`` or ``.npz`` for that. An *open* chain
+    written as xyz does not repeat its first vertex, so it reads back as closed unless read
+    with ``closed=False``.
+``.txt``, ``.dat``, ``.tsv``, ``.csv``
+    One vertex per line, separated by white space, tabs or commas; an optional header line
+    (when it names ``x``, ``y``, ``z`` those columns are read). See :func:`from_text`.
 ``.json``
     ``{"format": "stiffknots-chain", "version": 1, "closed": ..., "coords": [[x, y, z], ...],
-    "meta": {...}, "stiffknots_version": ...}``; exact float round trip.
+    "meta": {...}, "stiffknots_version": ...}``; exact float round trip. A bare JSON list of
+    ``[x, y, z]`` triples is read too.
 ``.npz``
     NumPy archive with ``coords``, ``closed`` and ``meta`` (a JSON string); no pickles.
+    ``.npy``: one float array of shape (N, 3).
 ``.obj``
     Wavefront OBJ polylines as written by ElasticKnots: ``v x y z`` vertex lines and ``l i j ...``
     line elements (1-based, negative indices relative). Reading orders the vertices along the
     line elements and detects closure; writing emits one ``l i i+1`` element per bond.
+``.vect``
+    Geomview VECT with one polyline, as KnotPlot and ridgerunner write them; a negative vertex
+    count means closed. Files with several polylines (links) are refused. See
+    :func:`from_vect`.
 
-Unreadable or corrupt files raise :class:`ChainFormatError` (a ``ValueError``) naming the file
-and what was wrong.
+Unreadable or corrupt files raise :class:`ChainFormatError` (a ``ValueError``): one line naming
+the file, the line where it can, and what was wrong.
 """
 
 from __future__ import annotations
@@ -52,16 +98,22 @@ from stiffknots.errors import ChainFormatError
 from stiffknots.fileio import atomic_path
 
 __all__ = [
+    "READ_SUFFIXES",
     "ChainFormatError",
+    "closure_note",
     "from_json",
+    "from_npy",
     "from_npz",
     "from_obj",
+    "from_text",
+    "from_vect",
     "from_xyz",
     "load",
     "save",
     "to_json",
     "to_npz",
     "to_obj",
+    "to_vect",
     "to_xyz",
 ]
 
@@ -126,131 +178,140 @@ def to_xyz(chain: Chain, path: PathLike, dialect: str = "topoly") -> None:
 def from_xyz(path: PathLike, closed: bool | None = None, meta: dict | None = None) -> Chain:
     """Read a chain from an xyz text file (one configuration).
 
-    Accepts topoly's nxyz lines ``"i x y z"``, plain ``"x y z"`` lines, and KymoKnot files (a
-    first line with the count, optionally followed by a non-numeric title line as in its LAMMPS
-    variant). Blank lines and ``#`` comments are skipped.
-
-    A cut or damaged file must not read as another chain. The rule:
-
-    * a KymoKnot count line must equal the number of bead lines (ChainFormatError);
-    * nxyz indices must count up by one from the first (a missing or swapped line is a
-      ChainFormatError); a closing line repeats the first index;
-    * a file that does not end with a newline may have lost the end of its last line: it is
-      read, with a :class:`~stiffknots.errors.ChainFormatWarning`;
-    * the closure: a file whose last bead repeats the first is a closed chain. A plain or nxyz
-      file without that repeated bead cannot tell an open chain from a closed one written
-      without it, or from a closed chain that lost its last lines: unless ``closed`` is given,
-      it is read as open with a ChainFormatWarning saying so (a KymoKnot file with a count is
-      complete, and KymoKnot's convention — linear chains do not repeat — decides silently).
-      The chain's ``meta["closure"]`` (default metadata) records which closure was taken and
-      why.
+    Accepts topoly's nxyz lines ``"i x y z"``, plain ``"x y z"`` lines, molecular-style
+    ``"C x y z"`` lines (a label first), and KymoKnot files (a first line with the count,
+    optionally followed by a non-numeric title line as in its LAMMPS variant); the same parser
+    as :func:`from_text`. Blank lines and ``#`` comments are skipped.
 
     Parameters
     ----------
     closed : bool, optional
-        ``None`` (default): the chain is closed iff the last bead repeats the first (which is then
-        dropped). ``True``/``False`` force it; with ``True`` a repeated closing bead is dropped.
+        ``None`` (default): the closure rule of this module (a repeated first vertex means
+        closed, the repeat dropped; otherwise the chain is *assumed closed* and
+        ``meta["closure"]`` says so). ``True``/``False`` force it; with ``True`` a repeated
+        closing vertex is dropped.
     meta : dict, optional
-        Metadata for the chain (the format stores none); ``{"source": path, "closure": ...}``
-        by default.
+        Metadata for the chain (the format stores none); ``{"source": path}`` by default.
     """
-    import warnings
+    return from_text(path, closed=closed, meta=meta)
 
-    from stiffknots.errors import ChainFormatWarning
 
+def from_text(path: PathLike, closed: bool | None = None, meta: dict | None = None) -> Chain:
+    """Read a chain from a plain table of vertices: ``x y z`` text, tsv or csv.
+
+    One vertex per line, separated by white space, tabs or commas (sniffed from the first data
+    line). An optional header line names the columns: when it names ``x``, ``y`` and ``z`` those
+    columns are read (other columns ignored); otherwise the lines must have 3 columns, or 4 with
+    an integer index (topoly's nxyz) or a label (molecular xyz) first. A first line holding one
+    integer is a vertex count (KymoKnot, molecular xyz): the number of vertex lines must match
+    it, and a non-numeric title line may follow it. Blank lines and ``#`` comments are skipped.
+
+    Closure (``closed=None``): a file whose last vertex repeats the first is closed (the repeat
+    dropped); otherwise the chain is *assumed* closed (a knot) and ``meta["closure"]`` says so.
+    Pass ``closed=False`` for an open chain.
+    """
     text = _read_text(path)
-    if text.strip() and not text.endswith(("\n", "\r")):
-        warnings.warn(f"{path}: the file does not end with a newline; its last line may be cut",
-                      ChainFormatWarning, stacklevel=2)
-    lines = [ln.strip() for ln in text.splitlines()]
-    lines = [ln for ln in lines if ln and not ln.startswith("#")]
+    lines = []
+    for lineno, raw in enumerate(text.splitlines(), start=1):
+        ln = raw.strip()
+        if ln and not ln.startswith("#"):
+            lines.append((lineno, ln))
     if not lines:
-        raise ChainFormatError(f"{path}: empty xyz file (no bead lines)")
+        raise ChainFormatError(f"{path}: empty file (no vertex lines)")
+    delim = "," if "," in lines[0][1] else ("\t" if "\t" in lines[0][1] else None)
+
+    def cells(ln: str) -> list[str]:
+        if delim is None:
+            return ln.split()
+        tok = [c.strip().strip('"').strip("'") for c in ln.split(delim)]
+        while tok and tok[-1] == "":
+            tok.pop()
+        return tok
+
     count = None
-    first = lines[0].split()
-    if len(first) == 1:
+    cols: tuple[int, int, int] | None = None
+    ncol = None
+    first = cells(lines[0][1])
+    if len(first) == 1 and delim is None:
         try:
             count = int(first[0])
         except ValueError:
             raise ChainFormatError(
-                f"{path}, line 1: {lines[0]!r} is neither a bead line nor a bead count"
+                f"{path}, line {lines[0][0]}: {lines[0][1]!r} is neither a vertex line nor a "
+                "vertex count"
             ) from None
         lines = lines[1:]
-        if lines and not _is_number(lines[0].split()[0]):
-            lines = lines[1:]  # KymoKnot/LAMMPS title line
-    rows = []
-    index = []
-    ncol = None
-    for k, ln in enumerate(lines):
-        tok = ln.split()
+        if lines and not _is_number(cells(lines[0][1])[0]):
+            lines = lines[1:]  # KymoKnot/LAMMPS or molecular-xyz title line
+    elif not all(_is_number(t) for t in first) and not (
+        len(first) == 4 and all(_is_number(t) for t in first[1:])
+    ):
+        names = [t.lower() for t in first]
+        if all(c in names for c in ("x", "y", "z")):
+            cols = (names.index("x"), names.index("y"), names.index("z"))
+            ncol = len(names)
+        elif len(first) in (3, 4):
+            ncol = len(first)
+        else:
+            raise ChainFormatError(
+                f"{path}, line {lines[0][0]}: header {lines[0][1]!r} has {len(first)} columns "
+                "and does not name x, y and z"
+            )
+        lines = lines[1:]
+    rows: list[list[float]] = []
+    linenos: list[int] = []
+    index: list[int] = []
+    for lineno, ln in lines:
+        tok = cells(ln)
         if tok in (["X"], ["END"]):
             raise ChainFormatError(
-                f"{path}: contains several chains (separator {tok[0]!r}); only one is supported"
-            )
-        if len(tok) not in (3, 4):
-            raise ChainFormatError(
-                f"{path}: bead line {k + 1} {ln!r} has {len(tok)} columns, "
-                "expected 'x y z' or 'i x y z'"
+                f"{path}, line {lineno}: contains several chains (separator {tok[0]!r}); "
+                "only one is supported"
             )
         if ncol is None:
+            if len(tok) not in (3, 4):
+                raise ChainFormatError(
+                    f"{path}, line {lineno}: {ln!r} has {len(tok)} columns, "
+                    "expected 'x y z' or 'i x y z'"
+                )
             ncol = len(tok)
-        elif len(tok) != ncol:
+        if len(tok) != ncol:
             raise ChainFormatError(
-                f"{path}: bead line {k + 1} {ln!r} has {len(tok)} columns, "
-                f"earlier lines have {ncol}"
+                f"{path}, line {lineno}: {ln!r} has {len(tok)} columns, earlier lines have {ncol}"
             )
+        pick = cols if cols is not None else (ncol - 3, ncol - 2, ncol - 1)
         try:
-            if ncol == 4:
-                index.append(int(tok[0]))
-            rows.append([float(v) for v in tok[ncol - 3 :]])
+            if cols is None and ncol == 4 and _is_number(tok[0]):
+                index.append(int(tok[0]))  # an index column must hold integers
+            rows.append([float(tok[i]) for i in pick])
         except ValueError:
-            raise ChainFormatError(f"{path}: bead line {k + 1} {ln!r} is not numeric") from None
+            raise ChainFormatError(f"{path}, line {lineno}: {ln!r} is not numeric") from None
+        if not all(math.isfinite(v) for v in rows[-1]):
+            raise ChainFormatError(f"{path}, line {lineno}: non-finite coordinates {ln!r}")
+        linenos.append(lineno)
     if count is not None and count != len(rows):
         raise ChainFormatError(
-            f"{path}: header announces {count} beads but {len(rows)} bead lines follow "
+            f"{path}: header announces {count} vertices but {len(rows)} vertex lines follow "
             "(several configurations in one file are not supported)"
         )
     if not rows:
-        raise ChainFormatError(f"{path}: no bead lines")
+        raise ChainFormatError(f"{path}: no vertex lines")
     x = np.array(rows, dtype=np.float64)
-    if not np.all(np.isfinite(x)):
-        raise ChainFormatError(f"{path}: non-finite coordinates")
-    repeated = len(x) >= 2 and _ends_coincide(x)
-    _check_indices(path, index, repeated)
-    if closed is not None:
-        is_closed, why = bool(closed), "given"
-    elif repeated:
-        is_closed, why = True, "the last bead repeats the first"
-    elif count is not None:
-        is_closed, why = False, "KymoKnot file whose last bead does not repeat the first"
-    else:
-        is_closed, why = False, "assumed: the last bead does not repeat the first"
-        import warnings
-
-        from stiffknots.errors import ChainFormatWarning
-
-        warnings.warn(f"{path}: read as an open chain of {len(x)} beads, since its last bead "
-                      "does not repeat the first; a closed chain written without the repeated "
-                      "bead, or one that lost its last lines, reads the same: pass closed=True "
-                      "or closed=False to say which", ChainFormatWarning, stacklevel=2)
-    if is_closed and repeated:
-        x = x[:-1]
-    if meta is None:
-        meta = {"source": os.fspath(path),
-                "closure": f"{'closed' if is_closed else 'open'} ({why})"}
-    return _make_chain(x, is_closed, meta, path)
+    if len(index) == len(rows):
+        _check_index(path, index, linenos, bool(len(x) >= 2 and np.array_equal(x[0], x[-1])))
+    return _closed_chain(x, closed, None, "", path, meta, linenos)
 
 
-def _check_indices(path: PathLike, index: list[int], repeated: bool) -> None:
-    """nxyz indices count up by one from the first; a closing line repeats the first."""
-    if not index:
-        return
+def _check_index(path: PathLike, index: list[int], linenos: list[int], repeated: bool) -> None:
+    """An index column (topoly's nxyz) counts up by one from its first value; a closing line
+    repeats the first index. A line lost or moved inside the file would otherwise go unseen:
+    the chain would read as another one."""
     body = index[:-1] if repeated and len(index) >= 2 and index[-1] == index[0] else index
     for k, i in enumerate(body):
         if i != body[0] + k:
             raise ChainFormatError(
-                f"{path}: bead line {k + 1} has index {i}, expected {body[0] + k} (the indices "
-                "must count up by one: a line is missing or out of order)")
+                f"{path}, line {linenos[k]}: index {i}, expected {body[0] + k} (the index "
+                "column must count up by one: a line is missing or out of order)")
 
 
 def _is_number(s: str) -> bool:
@@ -259,6 +320,78 @@ def _is_number(s: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+_CLOSURE_ASSUMED = (
+    "assumed closed: the file does not record closure and its last vertex does not repeat the "
+    "first; read it as open (closed=False, --open) if it is an open chain"
+)
+
+
+def closure_note(chain: Chain) -> str:
+    """How the closure of a chain read by this module was decided (``meta["closure"]``, or the
+    flag recorded by the stiffknots ``.json``/``.npz`` formats)."""
+    note = chain.meta.get("closure") if isinstance(chain.meta, dict) else None
+    if isinstance(note, str) and note:
+        return note
+    return f"{'closed' if chain.closed else 'open'}: recorded in the file ('closed')"
+
+
+def _closed_chain(
+    x: np.ndarray,
+    closed: bool | None,
+    recorded: bool | None,
+    why: str,
+    path: PathLike,
+    meta: dict | None,
+    linenos: list[int] | None = None,
+    unit: str = "line",
+    strict: bool = False,
+) -> Chain:
+    """Apply the closure rule and build the chain; ``meta["closure"]`` says what was decided.
+
+    ``closed`` is the caller's choice (None: decide); ``recorded`` what the format itself
+    records (``why`` says where), None when it records nothing; with ``strict`` (the stiffknots
+    formats, which store the flag explicitly) the record wins over a repeated vertex.
+    """
+    repeated = len(x) >= 3 and _ends_coincide(x)
+    if strict and recorded is not None and closed is None:
+        closed_by_record = bool(recorded)
+        note = f"{'closed' if closed_by_record else 'open'}: {why}"
+        if closed_by_record and repeated:
+            x = x[:-1]
+        m = {"source": os.fspath(path)} if meta is None else dict(meta)
+        if "closure" in m:  # a note carried over from an earlier read: bring it up to date
+            m["closure"] = note
+        return _make_chain(x, closed_by_record, m, path)
+    if closed is not None:
+        is_closed = bool(closed)
+        note = f"{'closed' if is_closed else 'open'}: as requested"
+    elif repeated:
+        is_closed = True
+        note = "closed: the last vertex repeats the first (the repeat is dropped)"
+    elif recorded is not None:
+        is_closed = bool(recorded)
+        note = f"{'closed' if is_closed else 'open'}: {why}"
+    else:
+        is_closed = True
+        note = _CLOSURE_ASSUMED
+    if is_closed and repeated:
+        x = x[:-1]
+        if closed is not None:
+            note += " (a repeated closing vertex is dropped)"
+    d = x[1:] - x[:-1]
+    dup = np.flatnonzero(~np.any(d != 0.0, axis=1))
+    if len(dup):
+        k = int(dup[0])
+        where = (f"lines {linenos[k]} and {linenos[k + 1]}" if linenos is not None
+                 else f"{unit}s {k + 1} and {k + 2}")
+        raise ChainFormatError(
+            f"{path}, {where}: the same vertex twice in a row (a zero-length bond)"
+        )
+    m = {"source": os.fspath(path)} if meta is None else dict(meta)
+    m["closure"] = note
+    return _make_chain(x, is_closed, m, path)
 
 
 def to_json(chain: Chain, path: PathLike, indent: int | None = None) -> None:
@@ -273,14 +406,32 @@ def to_json(chain: Chain, path: PathLike, indent: int | None = None) -> None:
         fh.write(text + "\n")
 
 
-def from_json(path: PathLike) -> Chain:
-    """Read the ``stiffknots-chain`` JSON format written by :func:`to_json`."""
+def from_json(path: PathLike, closed: bool | None = None) -> Chain:
+    """Read the ``stiffknots-chain`` JSON format written by :func:`to_json`, or a bare JSON list
+    of ``[x, y, z]`` triples.
+
+    The format's ``closed`` flag is obeyed unless ``closed`` is given; a bare list records no
+    closure and follows the closure rule of this module (assumed closed unless the last vertex
+    repeats the first).
+    """
     text = _read_text(path)
     try:
         d = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise ChainFormatError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
-    return Chain.from_dict(d, source=os.fspath(path))
+        raise ChainFormatError(
+            f"{path}, line {exc.lineno}: not valid JSON ({exc.msg})") from None
+    if isinstance(d, list):
+        ok = all(isinstance(r, list) and len(r) == 3 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in r) for r in d)
+        if not ok or not d:
+            raise ChainFormatError(f"{path}: a JSON list must hold [x, y, z] number triples")
+        x = np.array(d, dtype=np.float64)
+        if not np.all(np.isfinite(x)):
+            raise ChainFormatError(f"{path}: non-finite coordinates")
+        return _closed_chain(x, closed, None, "", path, None, unit="vertice")
+    c = Chain.from_dict(d, source=os.fspath(path))
+    return _closed_chain(c.coords, closed, c.closed, "recorded in the file ('closed')", path,
+                         c.meta, unit="vertice", strict=True)
 
 
 def to_npz(chain: Chain, path: PathLike) -> None:
@@ -299,8 +450,12 @@ def to_npz(chain: Chain, path: PathLike) -> None:
         )
 
 
-def from_npz(path: PathLike) -> Chain:
-    """Read an archive written by :func:`to_npz` (no pickles are loaded)."""
+def from_npz(path: PathLike, closed: bool | None = None) -> Chain:
+    """Read an archive written by :func:`to_npz` (no pickles are loaded).
+
+    Its ``closed`` flag is obeyed unless ``closed`` is given; an archive with ``coords`` only
+    follows the closure rule of this module (assumed closed unless the last vertex repeats
+    the first)."""
     try:
         with open(path, "rb") as fh:
             magic = fh.read(4)
@@ -312,7 +467,7 @@ def from_npz(path: PathLike) -> Chain:
         raise ChainFormatError(f"{path}: not an npz archive (no zip signature)")
     try:
         with np.load(path, allow_pickle=False) as z:
-            missing = [k for k in ("coords", "closed") if k not in z.files]
+            missing = [k for k in ("coords",) if k not in z.files]
             if missing:
                 raise ChainFormatError(f"{path}: npz archive lacks {', '.join(missing)}")
             if "format" in z.files and str(z["format"]) != FORMAT_NAME:
@@ -320,7 +475,7 @@ def from_npz(path: PathLike) -> Chain:
                     f"{path}: npz 'format' is {str(z['format'])!r}, expected {FORMAT_NAME!r}"
                 )
             coords = np.array(z["coords"])
-            closed_arr = z["closed"]
+            closed_arr = z["closed"] if "closed" in z.files else None
             meta_s = str(z["meta"]) if "meta" in z.files else "{}"
     except ChainFormatError:
         raise
@@ -328,7 +483,7 @@ def from_npz(path: PathLike) -> Chain:
         raise ChainFormatError(f"{path}: no such file") from None
     except (zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError) as exc:
         raise ChainFormatError(f"{path}: not a readable npz archive ({exc})") from None
-    if closed_arr.shape != () or closed_arr.dtype != np.bool_:
+    if closed_arr is not None and (closed_arr.shape != () or closed_arr.dtype != np.bool_):
         raise ChainFormatError(f"{path}: 'closed' must be a boolean scalar")
     if coords.dtype.kind not in "fiu":
         raise ChainFormatError(f"{path}: 'coords' must be numeric, got dtype {coords.dtype}")
@@ -338,7 +493,36 @@ def from_npz(path: PathLike) -> Chain:
         raise ChainFormatError(f"{path}: 'meta' is not valid JSON ({exc.msg})") from None
     if not isinstance(meta, dict):
         raise ChainFormatError(f"{path}: 'meta' must be a JSON object")
-    return _make_chain(coords, bool(closed_arr), meta, path)
+    x = _coords_array(coords, path)
+    recorded = None if closed_arr is None else bool(closed_arr)
+    return _closed_chain(x, closed, recorded, "recorded in the archive ('closed')", path, meta,
+                         unit="vertice", strict=True)
+
+
+def from_npy(path: PathLike, closed: bool | None = None) -> Chain:
+    """Read a NumPy ``.npy`` file holding one float array of shape (N, 3) (no pickles).
+
+    The array records no closure: the closure rule of this module applies (assumed closed
+    unless the last vertex repeats the first)."""
+    try:
+        arr = np.load(path, allow_pickle=False)
+    except FileNotFoundError:
+        raise ChainFormatError(f"{path}: no such file") from None
+    except (OSError, ValueError, EOFError) as exc:
+        raise ChainFormatError(f"{path}: not a readable .npy array ({exc})") from None
+    if not isinstance(arr, np.ndarray) or arr.dtype.kind not in "fiu":
+        raise ChainFormatError(f"{path}: expected a numeric array of shape (N, 3)")
+    return _closed_chain(_coords_array(arr, path), closed, None, "", path, None, unit="vertice")
+
+
+def _coords_array(coords: np.ndarray, path: PathLike) -> np.ndarray:
+    x = np.asarray(coords, dtype=np.float64)
+    if x.ndim != 2 or x.shape[1] != 3:
+        raise ChainFormatError(f"{path}: coordinates must have shape (N, 3), got {x.shape}")
+    if not np.all(np.isfinite(x)):
+        bad = int(np.argwhere(~np.isfinite(x))[0, 0])
+        raise ChainFormatError(f"{path}: vertex {bad + 1} is not finite: {x[bad].tolist()}")
+    return x
 
 
 def to_obj(chain: Chain, path: PathLike) -> None:
@@ -354,7 +538,7 @@ def to_obj(chain: Chain, path: PathLike) -> None:
         fh.write("\n".join(out) + "\n")
 
 
-def from_obj(path: PathLike, meta: dict | None = None) -> Chain:
+def from_obj(path: PathLike, closed: bool | None = None, meta: dict | None = None) -> Chain:
     """Import a curve from a Wavefront OBJ file (ElasticKnots ``.obj`` centre lines).
 
     ``v x y z [w]`` lines give vertices; ``l i j k ...`` lines give polylines (1-based indices,
@@ -363,13 +547,16 @@ def from_obj(path: PathLike, meta: dict | None = None) -> Chain:
     (from the lowest-index end of a path; a cycle starts at its lowest index and follows the
     direction in which its elements are written). A cycle gives a closed chain. A path whose end
     vertex repeats the coordinates of its start (a duplicated closing vertex) also gives a closed
-    chain, the duplicate dropped. Without ``l`` lines the vertices are taken in file order
-    (closed iff the last repeats the first). Vertices not on the line elements are ignored.
+    chain, the duplicate dropped. Without ``l`` lines the vertices are taken in file order and
+    the closure rule of this module applies (closed if the last repeats the first, else assumed
+    closed). ``closed=True/False`` overrides all of this. Vertices not on the line elements are
+    ignored.
     Other OBJ statements (``vn``, ``vt``, ``o``, ``g``, ``s``, ``mtllib``, ...) are ignored;
     faces (``f``) are an error.
     """
     text = _read_text(path)
     verts: list[list[float]] = []
+    vlines: list[int] = []
     succ: dict[int, list[int]] = {}
     edges: set[tuple[int, int]] = set()
     order_edges: list[tuple[int, int]] = []
@@ -394,6 +581,7 @@ def from_obj(path: PathLike, meta: dict | None = None) -> Chain:
             if not all(math.isfinite(v) for v in p):
                 raise ChainFormatError(f"{path}, line {lineno}: non-finite vertex {raw.strip()!r}")
             verts.append(p)
+            vlines.append(lineno)
         elif kw == "l":
             has_lines = True
             if len(tok) < 3:
@@ -433,13 +621,8 @@ def from_obj(path: PathLike, meta: dict | None = None) -> Chain:
     if not verts:
         raise ChainFormatError(f"{path}: no vertices ('v x y z' lines)")
     X = np.array(verts, dtype=np.float64)
-    src_meta = {"source": os.fspath(path)} if meta is None else meta
     if not has_lines:
-        x = X
-        closed = len(x) >= 4 and _ends_coincide(x)
-        if closed:
-            x = x[:-1]
-        return _make_chain(x, closed, src_meta, path)
+        return _closed_chain(X, closed, None, "", path, meta, vlines)
     if not edges:
         raise ChainFormatError(f"{path}: line elements contain no bonds")
     adj: dict[int, list[int]] = {}
@@ -482,25 +665,147 @@ def from_obj(path: PathLike, meta: dict | None = None) -> Chain:
             "vertices connected); expected one curve"
         )
     x = X[order]
-    closed = cycle
-    if not cycle and len(x) >= 4 and _ends_coincide(x):
-        x = x[:-1]
-        closed = True
-    elif cycle:
+    if cycle:
         # a loop through a duplicated vertex (e.g. the closing one repeated): drop the repeat
         same = np.all(x == np.roll(x, 1, axis=0), axis=1)
         if np.any(same) and len(x) - int(np.sum(same)) >= 3:
-            x = x[~same]
-    return _make_chain(x, closed, src_meta, path)
+            keep = ~same
+            x = x[keep]
+            order = [o for o, k in zip(order, keep, strict=True) if k]
+    why = ("the line elements form a loop" if cycle
+           else "the line elements form a path with two ends")
+    return _closed_chain(x, closed, cycle, why, path, meta, [vlines[o] for o in order])
 
 
-_READERS = {".xyz": from_xyz, ".json": from_json, ".npz": from_npz, ".obj": from_obj}
-_WRITERS = {".xyz": to_xyz, ".json": to_json, ".npz": to_npz, ".obj": to_obj}
+def to_vect(chain: Chain, path: PathLike) -> None:
+    """Write a Geomview VECT file with one polyline, as KnotPlot and ridgerunner read them: the
+    vertex count is negative for a closed chain (the first vertex is not repeated), one colour.
+    Floats are written with ``repr`` (exact round trip); metadata is not stored."""
+    x = chain.coords
+    n = len(x)
+    out = ["VECT", f"1 {n} 1", str(-n if chain.closed else n), "1"]
+    out += [f"{_fmt(p[0])} {_fmt(p[1])} {_fmt(p[2])}" for p in x]
+    out.append("0 0 0 1")
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+        fh.write("\n".join(out) + "\n")
+
+
+def from_vect(path: PathLike, closed: bool | None = None, meta: dict | None = None) -> Chain:
+    """Read a Geomview VECT file with one polyline (KnotPlot, ridgerunner/plCurve).
+
+    Layout (white space and line breaks are free; ``#`` starts a comment)::
+
+        VECT
+        NPOLYLINES NVERTICES NCOLORS
+        Nv[0] ... Nv[NPOLYLINES-1]      vertices of each polyline; negative: closed
+        Nc[0] ... Nc[NPOLYLINES-1]      colours of each polyline (0 or 1 ...)
+        x y z                           NVERTICES vertices
+        r g b a                         NCOLORS colours (ignored)
+
+    Only one polyline (one component: a knot) is read; a file with several (a link) is refused
+    with a message naming the count. Closure: the sign of the vertex count is obeyed (negative:
+    closed) unless ``closed`` is given; a last vertex repeating the first also means closed
+    (the repeat is dropped).
+    """
+    text = _read_text(path)
+    toks: list[tuple[str, int]] = []
+    for lineno, raw in enumerate(text.splitlines(), start=1):
+        for t in raw.split("#", 1)[0].split():
+            toks.append((t, lineno))
+    if not toks:
+        raise ChainFormatError(f"{path}: empty file")
+    key, line1 = toks[0]
+    if key.upper() == "4VECT":
+        raise ChainFormatError(f"{path}, line {line1}: 4VECT (4-dimensional) is not supported")
+    if key.upper() != "VECT":
+        raise ChainFormatError(
+            f"{path}, line {line1}: a VECT file starts with 'VECT', found {key!r}")
+    pos = 1
+
+    def ints(k: int, what: str) -> list[int]:
+        nonlocal pos
+        out = []
+        for _ in range(k):
+            if pos >= len(toks):
+                raise ChainFormatError(f"{path}: the file ends before the {what}")
+            t, ln = toks[pos]
+            try:
+                out.append(int(t))
+            except ValueError:
+                raise ChainFormatError(
+                    f"{path}, line {ln}: {what}: expected an integer, found {t!r}") from None
+            pos += 1
+        return out
+
+    npoly, nvert, ncolor = ints(3, "header counts (NPOLYLINES NVERTICES NCOLORS)")
+    hdr_line = toks[pos - 1][1]
+    if npoly < 1 or nvert < 1 or ncolor < 0:
+        raise ChainFormatError(
+            f"{path}, line {hdr_line}: header counts {npoly} {nvert} {ncolor} "
+            "(polylines, vertices, colours) must be positive")
+    if npoly > 1:
+        raise ChainFormatError(
+            f"{path}, line {hdr_line}: the file holds {npoly} polylines (components, a link "
+            "or several curves); stiffknots reads one knot: keep one component in the file")
+    (nv,) = ints(1, "vertex count of the polyline")
+    nv_line = toks[pos - 1][1]
+    (nc,) = ints(1, "colour count of the polyline")
+    if abs(nv) != nvert:
+        raise ChainFormatError(
+            f"{path}, line {nv_line}: the polyline has {abs(nv)} vertices but the header "
+            f"announces {nvert}")
+    if nc != ncolor:
+        raise ChainFormatError(
+            f"{path}, line {toks[pos - 1][1]}: the polyline has {nc} colours but the header "
+            f"announces {ncolor}")
+    if abs(nv) < 2:
+        raise ChainFormatError(f"{path}, line {nv_line}: a polyline of {abs(nv)} vertex")
+    need = 3 * nvert
+    if len(toks) - pos < need:
+        have = (len(toks) - pos) // 3
+        raise ChainFormatError(
+            f"{path}: the file ends after {have} of the {nvert} vertices the header announces")
+    vals = []
+    lines = []
+    for k in range(need):
+        t, ln = toks[pos + k]
+        try:
+            v = float(t)
+        except ValueError:
+            raise ChainFormatError(
+                f"{path}, line {ln}: vertex coordinate {t!r} is not a number") from None
+        if not math.isfinite(v):
+            raise ChainFormatError(f"{path}, line {ln}: non-finite vertex coordinate {t!r}")
+        vals.append(v)
+        if k % 3 == 0:
+            lines.append(ln)
+    pos += need
+    left = len(toks) - pos
+    if left != 4 * ncolor:
+        raise ChainFormatError(
+            f"{path}: after the vertices the header's {ncolor} colour(s) need {4 * ncolor} "
+            f"numbers, found {left}")
+    x = np.array(vals, dtype=np.float64).reshape(-1, 3)
+    why = ("the VECT vertex count is negative" if nv < 0
+           else "the VECT vertex count is positive")
+    return _closed_chain(x, closed, nv < 0, why, path, meta, lines)
+
+
+_READERS = {
+    ".xyz": from_xyz, ".txt": from_text, ".dat": from_text, ".csv": from_text,
+    ".tsv": from_text, ".json": from_json, ".npz": from_npz, ".npy": from_npy, ".obj": from_obj,
+    ".vect": from_vect,
+}
+_WRITERS = {".xyz": to_xyz, ".json": to_json, ".npz": to_npz, ".obj": to_obj, ".vect": to_vect}
+
+#: Suffixes :func:`load` reads.
+READ_SUFFIXES = tuple(_READERS)
 
 
 def save(chain: Chain, path: PathLike, **kwargs: Any) -> None:
     """Write ``chain`` in the format named by the suffix of ``path`` (``.xyz``, ``.json``,
-    ``.npz``, ``.obj``); keyword arguments go to the writer (e.g. ``dialect="kymoknot"``)."""
+    ``.npz``, ``.obj``, ``.vect``); keyword arguments go to the writer (e.g.
+    ``dialect="kymoknot"``)."""
     if not isinstance(chain, Chain):
         raise TypeError(f"save() expects a Chain, got {type(chain).__name__}")
     suffix = Path(path).suffix.lower()
@@ -511,9 +816,15 @@ def save(chain: Chain, path: PathLike, **kwargs: Any) -> None:
     _WRITERS[suffix](chain, path, **kwargs)
 
 
-def load(path: PathLike, **kwargs: Any) -> Chain:
-    """Read a chain, choosing the format by the suffix of ``path`` (``.xyz``, ``.json``,
-    ``.npz``, ``.obj``); keyword arguments go to the reader."""
+def load(path: PathLike, closed: bool | None = None, **kwargs: Any) -> Chain:
+    """Read a chain, choosing the format by the suffix of ``path`` (:data:`READ_SUFFIXES`:
+    ``.xyz``, ``.txt``, ``.dat``, ``.csv``, ``.tsv``, ``.json``, ``.npz``, ``.npy``, ``.obj``,
+    ``.vect``); keyword arguments go to the reader.
+
+    ``closed``: None (default) applies the closure rule of this module (see its docstring):
+    what the format records is obeyed, a repeated first vertex means closed, and otherwise the
+    chain is *assumed closed*; ``meta["closure"]`` says which. True/False force it.
+    """
     suffix = Path(path).suffix.lower()
     if suffix not in _READERS:
         raise ChainFormatError(
@@ -521,4 +832,4 @@ def load(path: PathLike, **kwargs: Any) -> Chain:
         )
     if not Path(path).exists():
         raise ChainFormatError(f"{path}: no such file")
-    return _READERS[suffix](path, **kwargs)
+    return _READERS[suffix](path, closed=closed, **kwargs)

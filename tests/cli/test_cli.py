@@ -66,7 +66,8 @@ def test_user_mistakes_exit_2_one_line(args):
 
 
 def test_anneal_json_small(tmp_path):
-    rc, out, err = run("anneal", "3_1", "--moves", "300000", "--replicas", "2", "--json",
+    rc, out, err = run("anneal", "3_1", "--moves", "300000", "--replicas", "2", "--rounds", "1",
+                       "--json",
                        "--out", str(tmp_path))
     assert rc == 0, err
     d = json.loads(out)

@@ -17,6 +17,7 @@ from stiffknots.engine.driver import (
     plan_steps,
     run_replica,
 )
+from stiffknots.engine.params import Ensemble, MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.engine.tempering import run_tempering
 from stiffknots.problems.closed import anneal, checkpoint_path
@@ -28,6 +29,20 @@ def chain(name, n=150):
 
 SMALL = AnnealSettings(moves=300_000, n_chunks=20)
 PT = replace(SMALL, schedule=Schedule(kind="tempering", t_start=1e-3, t_end=1e-6, n_temps=3))
+# the fixed-force ensemble (§VIII) and the restricted-curvature plan (§IX D) run through the
+# same loop and must resume exactly too
+FORCE = replace(SMALL, ensemble=Ensemble("force", force=0.05), schedule=Schedule(
+    kind="geometric", t_start=1e-2, t_end=1e-6, relax_fraction=0.0))
+TIGHT = replace(SMALL, plan="tight", params=MoveParams(exclusion="tube", w=0.25))
+
+
+def start_of(settings):
+    if settings.ensemble.kind == "force":
+        from stiffknots.knots.open_embedding import pad_open_chain
+        from stiffknots.problems.open_extension import open_chain
+
+        return pad_open_chain(open_chain("3_1", 30, seed=0), 80)
+    return chain("3_1")
 
 
 def same(a, b):
@@ -56,9 +71,10 @@ def run(x, settings, **kw):
     return run_replica(x, settings, **kw)
 
 
-@pytest.mark.parametrize("settings", [SMALL, PT], ids=["anneal", "tempering"])
+@pytest.mark.parametrize("settings", [SMALL, PT, FORCE, TIGHT],
+                         ids=["anneal", "tempering", "force", "tight"])
 def test_stop_and_resume_is_exact(tmp_path, settings):
-    x = chain("3_1")
+    x = start_of(settings)
     a = run(x, settings, seed=11)
     ck = tmp_path / "run.npz"
     # stop twice (the second time across the end of the relaxation stage), then finish
@@ -106,7 +122,7 @@ def test_resume_refuses_another_run(tmp_path):
 
 
 def test_anneal_checkpoint_dir(tmp_path):
-    kw = dict(moves=200_000, replicas=1, seed=4, workers=1)
+    kw = dict(moves=200_000, replicas=1, seed=4, workers=1, rounds=1)
     a = anneal("3_1", **kw)
     b = anneal("3_1", **kw, checkpoint_dir=tmp_path)
     assert checkpoint_path(tmp_path, 0).exists()
@@ -129,7 +145,7 @@ def test_cli_resume_needs_checkpoint():
 def test_cli_checkpoint_resume(tmp_path):
     def cli(*extra):
         p = subprocess.run([sys.executable, "-m", "stiffknots.cli", "anneal", "4_1", "--moves",
-                            "300000", "--replicas", "1", "--json", *extra],
+                            "300000", "--replicas", "1", "--rounds", "1", "--json", *extra],
                            capture_output=True, text=True, timeout=600)
         assert p.returncode == 0, p.stderr
         return json.loads(p.stdout)
@@ -137,3 +153,42 @@ def test_cli_checkpoint_resume(tmp_path):
     a = cli("--checkpoint", str(tmp_path))
     b = cli("--checkpoint", str(tmp_path), "--resume")
     assert a["epsilon"] == b["epsilon"]
+
+
+KILLED_FORCE_RUN = """
+import sys
+from stiffknots.problems.open_force import anneal_open_force
+anneal_open_force("3_1", 0.05, n_beads=80, moves=3_000_000, replicas=1, seed=1, workers=1,
+                  checkpoint_dir=sys.argv[1], checkpoint_seconds=0.05)
+"""
+
+
+@pytest.mark.slow
+def test_force_route_resumes_exactly_after_kill_9(tmp_path):
+    # an open knot at fixed force (§VIII), killed with SIGKILL in the middle of its run, then
+    # resumed from its checkpoint: the same chain, bit for bit, as an uninterrupted run
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from stiffknots.problems.open_force import anneal_open_force
+
+    kw = {"n_beads": 80, "moves": 3_000_000, "replicas": 1, "seed": 1, "workers": 1}
+    ref = anneal_open_force("3_1", 0.05, **kw)
+    ck = tmp_path / "ck"
+    p = subprocess.Popen([sys.executable, "-c", KILLED_FORCE_RUN, str(ck)])
+    f = ck / "replica_0.ckpt.npz"
+    t0 = time.time()
+    while not f.exists() and time.time() - t0 < 120:
+        time.sleep(0.05)
+    time.sleep(0.5)  # let it run on past the first checkpoint
+    os.kill(p.pid, signal.SIGKILL)
+    p.wait()
+    _, meta = load_checkpoint(f)
+    assert 0 < meta["step"] < meta["n_steps"]  # killed in the middle
+    res = anneal_open_force("3_1", 0.05, checkpoint_dir=ck, resume=True, **kw)
+    assert res.best.resumed_from_step == meta["step"]
+    assert np.array_equal(res.best.coords, ref.best.coords)
+    assert res.best.total_energy == ref.best.total_energy

@@ -80,7 +80,7 @@ def test_starts_selection():
 def test_anneal_records_the_start_of_every_replica():
     from stiffknots import anneal
 
-    res = anneal("4_1", moves=200_000, replicas=2, seed=3, workers=1)
+    res = anneal("4_1", moves=200_000, replicas=2, seed=3, workers=1, rounds=1)
     assert sorted(r.start for r in res.replicas) == ["braid", "cage"]
     assert all(r.knot_verified for r in res.replicas)
     assert sorted(res.settings["start"]) == ["braid", "cage"]
@@ -99,7 +99,7 @@ def test_cli_start_outside_family_exits_2():
 
 @pytest.mark.slow
 def test_5_2_cage_start_reaches_the_4_fold_cage_below_the_80():
-    # paper §VII: 4C is the ground state of 5_2, the 80 metastable (hierarchy e:hierarchy);
+    # paper §VII: 4C is the ground state of 5_2, the 80 metastable (hierarchy eq. (39));
     # from the braid start the annealing reaches the 80 at ε ≈ 149 (N = 150, bead rule)
     from stiffknots import anneal
     from stiffknots.analysis import classify

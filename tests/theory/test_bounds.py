@@ -137,4 +137,4 @@ def test_tension_relations():
     assert mu == pytest.approx(1.5)
     e = eps_e(E, L_e, C)
     assert e == pytest.approx(4.0)
-    assert tension_from_eps_e(e, L_e, C) == pytest.approx(mu)  # (e:tension_energy)
+    assert tension_from_eps_e(e, L_e, C) == pytest.approx(mu)  # (eq. (41))

@@ -95,14 +95,14 @@ def test_method1_equals_shooting():
 
 def test_appendix_integrals_raw_tanh_sinh():
     """The Appendix D integrals taken literally (tanh-sinh at the singular endpoints, no
-    substitution) satisfy (e:alpha_loop) and the 8's periodicity condition at our roots and
+    substitution) satisfy (eq. (D5)) and the 8's periodicity condition at our roots and
     give the same energies."""
     with mp.workdps(30):
         a, e = solve_loop()
         ix_lo, i0_lo, i1_lo = el._appendix_integrals(a, mp.mpf(-1), mp.mpf(0), raw=True)
         ix_hi, i0_hi, i1_hi = el._appendix_integrals(a, mp.mpf(0), a, raw=True)
-        assert abs(2 * ix_lo + ix_hi) < mp.mpf(10) ** -15  # (e:alpha_loop)
-        eps = 2 * (2 * i1_lo + i1_hi) * (2 * i0_lo + i0_hi)  # (e:epsilon_loop_calc)
+        assert abs(2 * ix_lo + ix_hi) < mp.mpf(10) ** -15  # (eq. (D5))
+        eps = 2 * (2 * i1_lo + i1_hi) * (2 * i0_lo + i0_hi)  # (eq. (D8))
         assert abs(eps / e - 1) < mp.mpf(10) ** -15
         b, f = solve_eight()
         ix, i0, i1 = el._appendix_integrals(b, mp.mpf(-1), b, raw=True)

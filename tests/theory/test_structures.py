@@ -1,7 +1,7 @@
 """Tests of the structure route to the thin limit w = 0 (paper §V B, §VI, §VII, Appendix C/D).
 
-The solver never sees the closed formulas: (e:epsilon*_CB) 2 pi^2 i^2, the 80's
-(eps_8^(1/2) + (2 pi^2)^(1/2))^2 and (e:epsilon*_SBL) 4 n^2 eps_loop are what it is compared to,
+The solver never sees the closed formulas: (eq. (30)) 2 pi^2 i^2, the 80's
+(eps_8^(1/2) + (2 pi^2)^(1/2))^2 and (eq. (29)) 4 n^2 eps_loop are what it is compared to,
 with eps_8 and eps_loop from the Appendix D integrals (stiffknots.theory.elastica).
 """
 
@@ -40,7 +40,7 @@ def test_richardson_removes_even_powers():
 
 
 # ------------------------------------------------------------------------------------------
-# Circular braids: eps_CB = 2 pi^2 i^2 (e:epsilon*_CB)
+# Circular braids: eps_CB = 2 pi^2 i^2 (eq. (30))
 # ------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("i", [1, 2, 3])
 def test_circular_braid(i):
@@ -79,7 +79,7 @@ def test_eighty_energy():
 def test_eighty_solution_is_two_free_closed_elastica():
     c = elastica_constants()
     d = st.structure_energy("80")["details"]
-    # (e:L_P_parts): L_0 / L = (2 pi^2 / eps_80)^(1/2) (K = 256 level: O(K^-2) accuracy)
+    # (eq. (28)): L_0 / L = (2 pi^2 / eps_80)^(1/2) (K = 256 level: O(K^-2) accuracy)
     assert d["length_fraction_circle"] == pytest.approx(math.sqrt(EPS_0 / EPS_80), abs=1e-4)
     # no force between the circle and the 8 (§VII); the 8 carries A / mu = alpha_8 (App. D)
     assert d["force_on_circle_over_mu"] < 1e-8
@@ -99,7 +99,7 @@ def test_eighty_energy_does_not_depend_on_the_contact_point():
 
 
 # ------------------------------------------------------------------------------------------
-# Point-braid and loops (e:epsilon*_SBL): clamped ends at a point-braid
+# Point-braid and loops (eq. (29)): clamped ends at a point-braid
 # ------------------------------------------------------------------------------------------
 def test_point_braid_loops():
     res = st.structure_energy("PBL(1)")
@@ -132,7 +132,7 @@ def test_discretisation_error_is_clean_k_minus_2(name):
 
 
 def test_tension_is_energy_over_length():
-    # (e:mu_closed): the multiplier of the length constraint is mu = E / L
+    # (eq. (26)): the multiplier of the length constraint is mu = E / L
     for name in ("80", "PBL(1)"):
         d = st.structure_energy(name)["details"]
         assert d["mu_minus_E_over_L"] == pytest.approx(0.0, abs=1e-8)
@@ -144,7 +144,7 @@ def test_tension_is_energy_over_length():
 def test_cage_energy():  # a few seconds (cached for the next test)
     res = st.structure_energy("4C")
     eps, err = res["epsilon"], res["error"]
-    assert 8.0 * math.pi**2 < eps < 129.6  # (e:epsilon_ineq_0) and the paper's Monte Carlo
+    assert 8.0 * math.pi**2 < eps < 129.6  # (eq. (31)) and the paper's Monte Carlo
     assert err <= 0.3
     d_level, d_order = _top_order_diffs(res)
     assert err >= max(d_level, d_order)
@@ -152,7 +152,7 @@ def test_cage_energy():  # a few seconds (cached for the next test)
     sh = res["details"]["shooting"]
     assert sh["converged"]
     assert sh["epsilon"] == pytest.approx(eps, abs=max(err, 1e-8) + 1e-8)
-    # (e:mu_closed) from the first integral of (e:var_E_1_P) along the arc
+    # (eq. (26)) from the first integral of (eq. (21)) along the arc
     assert sh["mu"] == pytest.approx(eps, rel=1e-8)
 
 

@@ -1,8 +1,8 @@
 """Analysis of knot shapes: contacts, line-braids and point-braids, shape classes, states.
 
 Implements the structural reading of §V (line-braids, point-braids, multiple points, the
-structure graph; Figs 5 and 9 of Gallotti & Pierre-Louis, "Stiff knots", PRE 2007) and the
-shape classes of the Monte Carlo study of §VII (circular braid, 4-fold cage, "80"; Fig. 7).
+structure graph; Figs 5 and 7 of Gallotti & Pierre-Louis, "Stiff knots", PRE 2007) and the
+shape classes of the Monte Carlo study of §VII (circular braid, 4-fold cage, "80"; Figs 6 and 7).
 
 Public API
 ----------

@@ -2,7 +2,7 @@
 
 In the thin limit ``w → 0`` of §V the strands of a knot gather into *line-braids* (several
 strands running together along a curve) joined at *multiple points* and *point-braids*
-(Fig. fig:accum c, d and Fig. fig:structure). At finite width these accumulations show up as
+(Fig. 4 c, d and Fig. 5). At finite width these accumulations show up as
 *contacts*: pairs of beads that are far apart along the chain but close in space. This module
 finds them; :mod:`stiffknots.analysis.structure` turns them into line-braids, point-braids and
 the structure graph.

@@ -2,7 +2,7 @@
 
 Principal axes (best-fit plane), winding about an axis, planar turning number, total
 curvature, inflection points. Conventions follow the paper: total curvature
-``κ̄ = ∫ κ ds`` (eq. e:total_curv), for a polygon the sum of its turning angles.
+``κ̄ = ∫ κ ds`` (eq. (10)), for a polygon the sum of its turning angles.
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def turning_angles(x: np.ndarray, closed: bool = True) -> np.ndarray:
 
 
 def total_curvature(x: np.ndarray, closed: bool = True) -> float:
-    """Total curvature ``κ̄`` (eq. e:total_curv): the sum of the turning angles."""
+    """Total curvature ``κ̄`` (eq. (10)): the sum of the turning angles."""
     return float(turning_angles(x, closed).sum())
 
 

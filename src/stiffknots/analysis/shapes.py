@@ -1,6 +1,6 @@
 """Shape classification of closed stiff knots: circular braid, 4-fold cage, "80" (paper §VII).
 
-The Monte Carlo study of §VII (Fig. fig:MC, Fig. fig:MC_braids) finds three shapes for the
+The Monte Carlo study of §VII (Fig. 6, Fig. 7) finds three shapes for the
 ``n = 2`` knots: the circular braid (CB) of the trefoil, the 4-fold cage (4C) of ``4_1`` and
 ``5_2``, and the "80" (an 8 plus a circle) of ``5_2``, ``6_2`` and ``6_3``. :func:`classify`
 decides between them from the geometry and the contact structure of the chain alone — never
@@ -9,7 +9,7 @@ why. Anything that does not clearly match a class is ``"other"``.
 
 Classes and their criteria (thresholds in :class:`Thresholds`)
 ----------------------------------------------------------------
-``"CB"`` — circular braid of index ``i`` (§VI.C, Fig. fig:MC_braids a)
+``"CB"`` — circular braid of index ``i`` (§VI C, Fig. 7 a)
     An ``i``-times covered circle (the ``n = i`` family, ``ε° = 2π²i²``). Seen along the normal
     of its best-fit plane the chain winds ``i`` times around its centroid, *monotonically*
     (every bond advances the azimuth the same way: fraction ``≥ 0.97``), on a thin annulus
@@ -23,7 +23,7 @@ Classes and their criteria (thresholds in :class:`Thresholds`)
     — and the contact line-braids are only reported. A plain circle satisfies the criterion
     with ``i = 1``: it is the ``i = 1`` member of the family (the unknot, ``ε = 2π²``) and is
     reported as ``CB`` with multiplicity 1.
-``"4C"`` — 4-fold cage (Fig. fig:MC, Fig. fig:MC_braids b)
+``"4C"`` — 4-fold cage (Fig. 6, Fig. 7 b)
     Structure: exactly two contact zones, each a point-braid of two strand passages (no
     line-braid; strands within 45° of tangent), joined by exactly four free arcs, each running
     from one point-braid to the other and carrying 10–40 % of the length. Geometry: the cage
@@ -34,7 +34,7 @@ Classes and their criteria (thresholds in :class:`Thresholds`)
     crossed, at least 60° apart — the four-fold symmetry of the cage. Annealed 4_1 cages at
     ``N = 150`` give radial variation 0.06, ``λ3/λ1 ≈ 0.4``, pole distance ≈ 1.02 diameters
     and pole axes 87–90° apart.
-``"80"`` — an 8 plus a circle (Fig. fig:MC_braids c, eq. e:epsilon*_parts)
+``"80"`` — an 8 plus a circle (Fig. 7 c, eq. (27))
     The chain can be cut at one of its contacts into two closed sub-loops: a *circle* (the
     0: planar turning number ``±1``, radial variation about its centre ``≤ 0.2``, total
     curvature ``2π`` within −15 %/+35 %, 20–55 % of the length; the theory gives
@@ -42,7 +42,7 @@ Classes and their criteria (thresholds in :class:`Thresholds`)
     inflection points, total curvature between 1.1 and 2 turns — the elastica 8 has 1.45 —,
     the rest of the length). Both sub-loops must close smoothly at the cut (their end
     tangents within 45°): the 8 and the 0 are joined by a point-braid, whose strands are
-    tangent (§V.B), not by a crossing. Both must be roughly planar (``(λ3/λ1)^{1/2} ≤ 0.35``).
+    tangent (§V B), not by a crossing. Both must be roughly planar (``(λ3/λ1)^{1/2} ≤ 0.35``).
     Where the circle lies is not imposed: the Monte Carlo 80s run the circle along one lobe
     of the 8 (one point-braid and three double points), the theoretical shadow of
     :func:`stiffknots.theory.elastica.eighty_curve` puts it outside; both are 80s.
@@ -414,7 +414,7 @@ def shape_features(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
 def classify(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
              factor: float = DEFAULT_CONTACT_FACTOR, cutoff: float | None = None,
              min_sep: int = DEFAULT_MIN_SEP, thresholds: Thresholds | None = None) -> Shape:
-    """Classify a closed chain as circular braid, 4-fold cage, 80 or other (§VII, Fig. 7).
+    """Classify a closed chain as circular braid, 4-fold cage, 80 or other (§VII, Figs 6, 7).
 
     Parameters
     ----------

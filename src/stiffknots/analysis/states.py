@@ -2,7 +2,7 @@
 
 "Repeated simulations with the same knot provide us with the ground state and sometimes also
 with metastable states" (§VII); for ``5_2`` the 4-fold cage is the ground state and the 80
-metastable (eq. e:hierarchy). :func:`group_states` sorts a set of final chains into states:
+metastable (eq. (39)). :func:`group_states` sorts a set of final chains into states:
 same shape class (:func:`~stiffknots.analysis.shapes.classify`; a circular braid's index is
 part of its class) and same normalised energy ``ε`` within a relative tolerance. The state with
 the lowest ``ε`` is the ground state, the others are metastable.

@@ -1,11 +1,11 @@
-"""Line-braids, point-braids, multiple points and the structure graph (paper §V, Figs 5 and 9).
+"""Line-braids, point-braids, multiple points and the structure graph (paper §V, Figs 5 and 7).
 
-§V.B of the paper describes the shape of a knot in the thin limit ``w → 0`` as a *structure*
+§V B of the paper describes the shape of a knot in the thin limit ``w → 0`` as a *structure*
 ``{S}``: line-braids (``m`` strands that have shrunk laterally onto one curve; a single string is
 a line-braid of multiplicity ``m = 1``) connected at *multiple points* (strands crossing at an
-angle, Fig. fig:accum c) and *point-braids* (a braid shrunk laterally and then in length; the
-strands enter and leave it tangentially along one axis, Fig. fig:accum d). Fig. fig:structure
-sketches such a structure; Fig. fig:MC_braids (Fig. 9 of the paper) marks them on the Monte Carlo
+angle, Fig. 4 c) and *point-braids* (a braid shrunk laterally and then in length; the
+strands enter and leave it tangentially along one axis, Fig. 4 d). Fig. 5
+sketches such a structure; Fig. 7 of the paper marks them on the Monte Carlo
 shapes: a line-braid of multiplicity 2 for the trefoil, two point-braids in the 4-fold cage, one
 point-braid and three double points in the "80".
 
@@ -30,10 +30,10 @@ structure graph
     Nodes: point-braids, multiple points and the two ends of every line-braid zone (and the two
     free ends of an open chain). Edges: the line-braid zones (multiplicity ``m``) and the free
     arcs between zones (multiplicity 1). A closed chain without contacts, or one lying entirely
-    in one line-braid (the circular braid, §VI.C), is a single closed edge without nodes.
+    in one line-braid (the circular braid, §VI C), is a single closed edge without nodes.
 
 Default ``min_length``: ``max(3 × cutoff, 0.1 L)``. In the thin limit a line-braid keeps a finite
-fraction of the length (its length is ``L (ε_p/ε)^{1/2}``, eq. e:L_P_parts) while a point-braid
+fraction of the length (its length is ``L (ε_p/ε)^{1/2}``, eq. (28)) while a point-braid
 shrinks with ``w``; on the paper's ``N = 150`` chains the point-braids span 5 to 12 bonds, below
 ``0.1 L = 15``.
 """
@@ -273,7 +273,7 @@ def local_multiplicity(cmap: ContactMap, max_gap: int | None = None) -> np.ndarr
 
 @dataclass
 class LineBraid:
-    """A line-braid (§V.B): stretches of the chain with constant multiplicity ``m >= 2`` that
+    """A line-braid (§V B): stretches of the chain with constant multiplicity ``m >= 2`` that
     touch each other.
 
     Attributes
@@ -385,7 +385,7 @@ class Edge:
 
 @dataclass
 class StructureGraph:
-    """The structure ``{S}`` of §V.B as a multigraph: line-braids and arcs joined at nodes."""
+    """The structure ``{S}`` of §V B as a multigraph: line-braids and arcs joined at nodes."""
 
     nodes: list[Node]
     edges: list[Edge]
@@ -615,7 +615,7 @@ def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
     min_length : float, optional
         Shortest line-braid (arc length, bond units); default ``max(3 × cutoff, 0.1 L)``.
     tangent_angle : float, default 35
-        Largest angle (degrees) between the strands of a point-braid (§V.B: strands leave a
+        Largest angle (degrees) between the strands of a point-braid (§V B: strands leave a
         point-braid tangentially); contacts at wider angles are multiple points.
 
     Returns

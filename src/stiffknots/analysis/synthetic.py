@@ -5,12 +5,12 @@ equally spaced in arc length on a smooth curve which is then scaled to unit mean
 
 * :func:`torus_braid` — a circular braid of index ``i``: the torus knot ``T(i, i+1)`` on a thin
   torus, i.e. an ``i``-times covered circle whose covers twist around each other (a line-braid
-  of multiplicity ``i``, §V.B / §VI.C).
+  of multiplicity ``i``, §V B / §VI C).
 * :func:`eight_plus_circle` — the "80": the elastica figure eight (Appendix D) followed by a
-  circle of the theoretical length fraction ``(2π²/ε_80)^{1/2}`` (eq. e:L_P_parts), running
+  circle of the theoretical length fraction ``(2π²/ε_80)^{1/2}`` (eq. (28)), running
   along one lobe (as in the Monte Carlo 80s) or touching it from outside (as in
   :func:`stiffknots.theory.elastica.eighty_curve`).
-* :func:`four_cage` — a 4-fold cage built from the paper's description (Fig. fig:MC): four arcs
+* :func:`four_cage` — a 4-fold cage built from the paper's description (Fig. 6): four arcs
   on a sphere, each running from one pole to the other while turning 90° in azimuth, the
   strands passing tangentially side by side through the two poles (two point-braids, the
   north one along ``x``, the south one along ``y``). Only the geometry is modelled; the knot
@@ -105,12 +105,12 @@ def eight_plus_circle(n: int = 150, *, inside: bool = True, lift: float = 1.5,
     """The "80": the elastica figure eight followed by a circle (§VII, Appendix D).
 
     The figure eight is the exact elastica of :func:`stiffknots.theory.elastica.eight_curve`;
-    the lengths follow eq. (e:L_P_parts), ``L_0/L = (2π²/ε_80)^{1/2} ≈ 0.372``. The path goes
+    the lengths follow eq. (28), ``L_0/L = (2π²/ε_80)^{1/2} ≈ 0.372``. The path goes
     once around the 8 from the apex of its upper lobe, then once around the circle, which is
     tangent to the lobe at that apex with the same tangent (a point-braid of two strands):
     ``inside=True`` puts the circle inside the lobe, running along it (it is a little longer
     than the lobe, so it crosses it twice: the Monte Carlo 80 with one point-braid and three
-    double points, Fig. fig:MC_braids c); ``inside=False`` puts it outside, touching the apex
+    double points, Fig. 7 c); ``inside=False`` puts it outside, touching the apex
     (the planar shadow of :func:`~stiffknots.theory.elastica.eighty_curve`).
 
     The planar path is lifted out of its plane by ``z = (lift/2) cos(2πs/L)`` so that the two
@@ -142,7 +142,7 @@ def eight_plus_circle(n: int = 150, *, inside: bool = True, lift: float = 1.5,
 
 
 def four_cage(n: int = 150, *, offset: float = 1.0, dense: int = 20) -> np.ndarray:
-    """A 4-fold cage (Fig. fig:MC): four pole-to-pole arcs on a sphere, two point-braids.
+    """A 4-fold cage (Fig. 6): four pole-to-pole arcs on a sphere, two point-braids.
 
     Arc ``k`` (``k = 0..3``) runs between the poles while its azimuth turns by 90° linearly in
     the polar angle; consecutive arcs pass straight through a pole, so the chain goes through

@@ -15,6 +15,7 @@ from stiffknots.cli.app import (
     JsonOpt,
     OutOpt,
     OverwriteOpt,
+    PolishOpt,
     ReplicaProgress,
     ReplicasOpt,
     ResultsFolder,
@@ -36,13 +37,6 @@ from stiffknots.cli.app import (
 )
 
 
-def shape_of(coords, params):
-    """The shape class of a closed chain (stiffknots.analysis.classify, §VII)."""
-    from stiffknots.analysis import classify
-
-    return classify(coords, d=params.w if params.exclusion == "tube" else params.d)
-
-
 def save_results(res, out_dir: Path, title: str, command: str) -> dict:
     """``res.save`` plus a picture of the best chain, the manifest written last; on Ctrl-C or
     an error none of it stays (:class:`ResultsFolder`)."""
@@ -60,9 +54,13 @@ def anneal(
     beads: Annotated[int, typer.Option(help="Number of beads N (bond length 1).",
                                        parser=count)] = 150,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica (default: 30,000,000; 3e7 works too).",
-        parser=count)] = None,
+        help="Attempted moves per replica (default: 30,000,000 at N = 150, scaled as N²; "
+             "3e7 works too).", parser=count)] = None,
     replicas: ReplicasOpt = 2,
+    rounds: Annotated[int, typer.Option(
+        help="Most rounds of --replicas replicas: after each round the run stops if the "
+             "lowest state (shape, ε within 0.1 %) was reached by 2 replicas; 1 = a fixed "
+             "budget.")] = 4,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper, d=1/√2) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model; default 1/√2).")
@@ -78,10 +76,15 @@ def anneal(
              "0 = plain annealing).")] = None,
     delta: Annotated[float, typer.Option(help="Single-bead rotation angle (rad).")] = math.pi / 100,
     m_max: Annotated[int | None, typer.Option(
-        help="Largest sub-chain of a crankshaft move (default: 75 ≥ N/2 at N = 150).")] = None,
+        help="Largest sub-chain of a crankshaft move (default: N/2, a whole loop).")] = None,
     checkpoint: CheckpointOpt = None,
     resume: ResumeOpt = False,
     start: StartOpt = "all",
+    polish: PolishOpt = True,
+    from_file: Annotated[str | None, typer.Option(
+        "--from", help="Start every replica from the curve in this file (any format of "
+                       "`stiffknots identify`; resampled to --beads unit bonds, knot type "
+                       "checked); NAME is then checked against it.")] = None,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
@@ -94,11 +97,12 @@ def anneal(
     from stiffknots.knots.starts import STARTS
     from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
-    from stiffknots.problems.closed import DEFAULT_MOVES, ClosedAnneal
+    from stiffknots.problems.closed import ClosedAnneal
 
-    moves = DEFAULT_MOVES if moves is None else moves
-    beads, moves = V.beads(beads), V.moves(moves)
-    replicas, seed = V.replicas(replicas), V.seed(seed)
+    beads, replicas, seed = V.beads(beads), V.replicas(replicas), V.seed(seed)
+    if moves is not None:
+        moves = V.moves(moves)
+    rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)
     choice("--start", start, ("all", *STARTS))
     choice("--exclusion", exclusion, ("bead", "tube"))
     choice("--schedule", schedule, SCHEDULES)
@@ -107,7 +111,8 @@ def anneal(
         raise UserError("--relax-fraction applies to the power and geometric schedules "
                         "(tempering has no relaxation stage)")
     given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
-    sch = replace(Schedule(), kind=schedule, **{k: v for k, v in given.items() if v is not None})
+    sch = replace(Schedule().for_beads(beads), kind=schedule,
+                  **{k: v for k, v in given.items() if v is not None})
     params = replace(MoveParams(), exclusion=exclusion, delta=delta,
                      **({} if m_max is None else {"m_max": m_max}),
                      **({} if w is None else {"w": w}))
@@ -117,18 +122,28 @@ def anneal(
     # every input is checked (and the folders claimed) before any work
     checkpoint = claim_checkpoint(checkpoint, resume)
     out_dir = prepare_out(out_dir, overwrite)
+    initial = None
+    if from_file is not None:
+        from stiffknots.formats import load
+
+        initial = load(from_file)
+        if not initial.closed:
+            raise UserError(f"--from {from_file}: the curve was read as open; anneal takes a "
+                            "closed curve (a knot)")
     problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
-                           resume=resume, start=start)
-    with ReplicaProgress(f"anneal {problem.knot_name}", replicas, disable=json_) as bars:
+                           resume=resume, start=start, rounds=rounds, initial=initial,
+                           polish=polish)
+    with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
+                         disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None
     check_interrupted(res, hint)
     width = width_of(params, beads)
     d = res.to_dict()
-    shape = shape_of(res.best.coords, params)
-    d["shape"], d["multiplicity"] = shape.label, shape.multiplicity
-    d["shape_reason"] = shape.reason
+    obs = res.best.observables
+    d["shape"], d["multiplicity"] = obs["label"], obs["multiplicity"]
+    d["shape_reason"] = obs["shape_reason"]
     d["width"] = width
     if checkpoint is not None:
         d["checkpoint_dir"] = str(checkpoint)
@@ -139,20 +154,24 @@ def anneal(
         dump(d)
         finish(res, replicas, hint)
         return
-    t = Table(title=escape(f"{res.knot}, {width['text']}, {moves:,} moves/replica"))
-    for col in ("replica", "seed", "start", "ε", "knot", "min seg dist", "acc single",
+    t = Table(title=escape(f"{res.knot}, {width['text']}, {res.settings['moves']:,} "
+                           "moves/replica"))
+    for col in ("replica", "seed", "start", "ε", "shape", "knot", "min seg dist", "acc single",
                 "acc multi", "s"):
         t.add_column(col, justify="right")
     for r in res.replicas:
         t.add_row(str(r.replica), str(r.seed), str(r.start), f"{r.epsilon:.4f}",
+                  r.observables["shape"],
                   escape(str(r.knot)) + (" ✓" if r.knot_verified else " ✗"),
                   f"{r.min_segment_distance:.3f}", f"{r.acceptance['single']['rate']:.3f}",
                   f"{r.acceptance['multi']['rate']:.3f}", f"{r.wall_time:.1f}")
     out.print(t)
     b = res.bounds
-    out.print(f"shape of the best chain: {shape.label}"
-              + (f" (i = {shape.multiplicity})" if shape.label == "CB" else "")
-              + f" — {shape.reason}", markup=False, highlight=False)
+    out.print(f"shape of the best chain: {obs['label']}"
+              + (f" (i = {obs['multiplicity']})" if obs["label"] == "CB" else "")
+              + f" — {obs['shape_reason']}", markup=False, highlight=False)
+    out.print(("converged: " if res.converged else "NOT converged: ") + res.convergence,
+              markup=False, highlight=False)
     out.print(f"best ε = {res.best.epsilon:.4f} at {width['text']} (a finite width: the thin "
               f"limit w/L → 0 lies below); bounds [{fmt(b['lower'])}, {fmt(b['upper'])}] "
               f"({b['attained_by']}); wall time {res.wall_time:.1f} s",

@@ -67,6 +67,9 @@ StartOpt = Annotated[str, typer.Option(
          "rational knot [ab]: 4_1, 5_2, 6_1, ...) or eighty (an 8 plus a circle).")]
 CheckpointOpt = Annotated[str | None, typer.Option(
     "--checkpoint", help="Write a checkpoint of every replica to this folder.")]
+PolishOpt = Annotated[bool, typer.Option(
+    "--polish/--no-polish", help="Take every replica's best chain to its local minimum with "
+                                 "the final minimiser (unit bonds and exclusion held exactly).")]
 ResumeOpt = Annotated[bool, typer.Option(
     "--resume", help="Continue from the checkpoints in --checkpoint (same arguments).")]
 
@@ -200,6 +203,25 @@ def prepare_folder(path: str | Path | None, option: str = "--out") -> Path | Non
     return None if path is None else _writable_folder(path, option)
 
 
+def prepare_file(path: str | Path | None, option: str) -> Path | None:
+    """Check before any work that a file can be written at ``path`` (``resample DEST``,
+    ``atlas --db``): not '', not a folder, its folder creatable and writable (created now,
+    removed again if the command fails)."""
+    if path is None:
+        return None
+    if str(path).strip() == "":
+        raise UserError(f"{option} must name a file, got ''")
+    path = Path(path)
+    if path.is_dir():
+        raise UserError(f"{option} {path} is a folder; give the path of a file")
+    try:
+        _writable_folder(path.parent, option)
+    except UserError as exc:
+        why = str(exc).rsplit("(", 1)[-1] if str(exc).endswith(")") else "not a folder)"
+        raise UserError(f"{option} {path}: cannot write there ({why}") from None
+    return path
+
+
 def prepare_out(path: str | Path | None, overwrite: bool = False, option: str = "--out"
                 ) -> Path | None:
     """Check ``--out`` before any work and claim it: exit 2 if it cannot be written, if another
@@ -328,6 +350,19 @@ def claim_checkpoint(path: str | Path | None, resume: bool) -> Path | None:
 
 # -- live progress ------------------------------------------------------------------------------
 
+_NOTES: list[str] = []  # said once, when the work starts
+
+
+def work_starts_note(text: str | None = None) -> None:
+    """With ``text``: keep a note to say when the work starts. Without: the work starts — say
+    the kept notes (after every input was checked: a mistake stays a single line)."""
+    if text is not None:
+        _NOTES.append(text)
+        return
+    while _NOTES:
+        err.print(_NOTES.pop(0), markup=False, highlight=False)
+
+
 
 class ReplicaProgress:
     """One live bar per replica on stderr: moves done, time left and the lowest ε so far.
@@ -347,6 +382,7 @@ class ReplicaProgress:
                                                 best="") for r in range(replicas)}
 
     def __enter__(self):
+        work_starts_note()
         self.progress.__enter__()
         return self
 

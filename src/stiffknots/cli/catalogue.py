@@ -29,15 +29,15 @@ def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T
     t.add_row("braid index i", fmt(d["braid_index"]))
     t.add_row("braid word", str(d["braid_word"]))
     t.add_row("alternating", fmt(d["alternating"]))
-    t.add_row("ε lower bound 2π²n² (e:epsilon_sup_n2)", fmt(d["lower_bound"]))
-    t.add_row(f"ε upper bound ({d['upper_bound_attained_by']}) (e:epsilon_ineq_0)",
+    t.add_row("ε lower bound 2π²n² (eq. (13))", fmt(d["lower_bound"]))
+    t.add_row(f"ε upper bound ({d['upper_bound_attained_by']}) (eq. (31))",
               fmt(d["upper_bound"]))
     g = d["predicted_ground_state"]
     t.add_row("ground state", f"circular braid, multiplicity {g['multiplicity']}, "
               f"ε* = {g['epsilon']:.4f}" if g else "not fixed by the bounds (n < i)")
     if "open_tension_bounds" in d:
         ob = d["open_tension_bounds"]
-        t.add_row("open knot μ*L_e²/C (e:mu_ineq)", f"[{fmt(ob['lower'])}, {fmt(ob['upper'])}]")
+        t.add_row("open knot μ*L_e²/C (eq. (45))", f"[{fmt(ob['lower'])}, {fmt(ob['upper'])}]")
     rc = d["restricted_curvature_bounds"]
     t.add_row("restricted curvature L†/R (§IX D)", f"[{fmt(rc['lower'])}, {fmt(rc['upper'])}]")
     out.print(t)

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import typer
 
-from stiffknots.cli import anneal, catalogue, open, studies, tightest
-from stiffknots.cli.app import Interrupted, app, err, release_folders
+from stiffknots.cli import anneal, atlas, catalogue, curves, db, open, studies, tightest
+from stiffknots.cli.app import Interrupted, app, err, release_folders, work_starts_note
 from stiffknots.errors import InvalidParameter, UserInputError, WorkerError
 
 # the commands, in the order `stiffknots --help` lists them
@@ -14,13 +14,19 @@ for _name, _command in (
         ("knot", catalogue.knot),
         ("elastica", catalogue.elastica),
         ("families", catalogue.families),
+        ("identify", curves.identify),
+        ("resample", curves.resample),
+        ("relax", curves.relax),
         ("anneal", anneal.anneal),
         ("open", open.open_knot),
         ("tightest", tightest.tightest),
         ("paper", studies.paper),
+        ("atlas", atlas.atlas),
         ("bench", studies.bench),
+        ("warmup", studies.warmup),
         ("version", catalogue.version)):
     app.command(_name)(_command)
+app.add_typer(db.db_app, name="db")  # the results database: states, grounds
 
 # API parameter → command-line option, where the names differ
 OPTION_NAMES = {"n_beads": "--beads", "checkpoint_dir": "--checkpoint"}
@@ -42,8 +48,26 @@ def _usage_line(e) -> str:
     return f"error: {msg} (see {where} --help)"
 
 
+# commands that run the numba kernels: on a cold cache they say first what takes time
+_ENGINE_COMMANDS = {"anneal", "open", "tightest", "paper", "bench", "relax"}
+
+
+def _note_cold_cache() -> None:
+    """On a cold cache, an engine command says what takes the time — when its work starts
+    (:func:`~stiffknots.cli.app.work_starts_note`), so that a mistake stays one line."""
+    import sys
+
+    from stiffknots.studies.warmup import cache_is_cold
+
+    args = [a for a in sys.argv[1:] if not a.startswith("-")]
+    if args and args[0] in _ENGINE_COMMANDS and cache_is_cold():
+        work_starts_note("first run: numba compiles the kernels once (about a minute; "
+                         "`stiffknots warmup` does it ahead) ...")
+
+
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
+    _note_cold_cache()
     try:
         _main()
     except SystemExit as e:

@@ -57,7 +57,8 @@ def open_knot(
     exclusion: Annotated[str, typer.Option(help="bead (paper) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model).")] = None,
     m_max: Annotated[int | None, typer.Option(
-        help="Largest sub-chain of a crankshaft move (default 60, at most N − 4).")] = None,
+        help="Largest sub-chain of a crankshaft move (default: N/2; at most N − 4).")
+                     ] = None,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
@@ -77,8 +78,7 @@ def open_knot(
     choice("--ensemble", ensemble, ("extension", "force"))
     choice("--exclusion", exclusion, ("bead", "tube"))
     tube_only(w, exclusion)
-    params = MoveParams(exclusion=exclusion, m_max=60 if m_max is None else m_max,
-                        **({} if w is None else {"w": w}))
+    params = MoveParams(exclusion=exclusion, m_max=m_max, **({} if w is None else {"w": w}))
     forces = floats(force, "--force") if force is not None else []
     les = floats(excess_length, "--excess-length") if excess_length is not None else []
     if ensemble == "force":

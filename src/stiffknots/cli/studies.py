@@ -16,6 +16,7 @@ from stiffknots.cli.app import (
     err,
     out,
     prepare_out,
+    work_starts_note,
 )
 
 
@@ -29,6 +30,7 @@ def bench(
     from stiffknots.studies.benchmark import run_benchmarks
 
     V.number("seconds_budget", seconds_budget, 0, lo_open=True)
+    work_starts_note()
     d = run_benchmarks(budget=seconds_budget, log=None if json_ else err.print)
     if json_:
         dump(d)
@@ -64,9 +66,17 @@ def paper(
         raise UserError(f"--budget must be one of {', '.join(BUDGETS)}, got {budget!r}")
     V.seed(seed)
     folder = prepare_out(out_dir, overwrite)
+    work_starts_note()
     # the report is written as the study runs: Ctrl-C or an error removes it again
     with ResultsFolder(folder, "paper", doing="running the study"):
         d = run_paper(budget=budget, out_dir=folder, seed=seed,
                       log=None if json_ else out.print)
     if json_:
         dump(d)
+
+
+def warmup() -> None:
+    """Compile and cache the numba kernels now (make does it once after installing)."""
+    from stiffknots.studies.warmup import warmup as run
+
+    run(lambda s: out.print(s, markup=False, highlight=False))

@@ -63,7 +63,7 @@ Energy modes and the curvature limit
 ------------------------------------
 The energy per joint is f(c), c = u_n·u_{n+1} = cos θ_n: f = 1 − c (mode 0, the paper's
 E_d), or f = ((1 − c)/s)^p (mode 1, whose sum is dominated by the largest turning angles as p
-grows: used by the restricted-curvature search of §IX.D; the scale s keeps the energies of
+grows: used by the restricted-curvature search of §IX D; the scale s keeps the energies of
 order one so that temperatures stay meaningful). Independently, a joint may be forbidden to turn
 by more than θ_max (``F_CMIN`` = cos θ_max): a move is rejected if it leaves a pivot's c
 below ``F_CMIN`` *and* lower than before (so a chain that starts above the limit can only

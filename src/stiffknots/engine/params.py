@@ -8,7 +8,7 @@ float parameter arrays (slots in :mod:`stiffknots.engine.prims`).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -37,7 +37,9 @@ class MoveParams:
     delta : angle of the paper's single-bead move (±delta), default π/100 (§VII).
     p_single : probability that a move is the paper's single-bead move.
     m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
-        multi-bead moves and leaves exactly the paper's move).
+        multi-bead moves and leaves exactly the paper's move). None (the default): N/2, set by
+        :meth:`for_beads` — a whole loop of a doubly covered circle must be able to turn in
+        its plane at any N (75 at the paper's N = 150).
     phi_max : largest rotation angle of a multi-bead move (radians).
     l_cap, l_min : a multi-bead move first draws a displacement scale ℓ log-uniformly in
         [l_min, l_cap], then an angle uniform in ±min(phi_max, ℓ/ρ_max), ρ_max the largest
@@ -48,7 +50,7 @@ class MoveParams:
     w : tube diameter (``tube`` model only).
     energy : ``"bending"`` — the paper's E_d = Σ (1 − cos θ_n) (§VII) — or ``"power"`` —
         Σ (1 − cos θ_n)^power, whose minimum approaches the smallest achievable largest
-        turning angle as ``power`` grows (the restricted-curvature search, §IX.D).
+        turning angle as ``power`` grows (the restricted-curvature search, §IX D).
     power : exponent of the ``"power"`` energy (integer ≥ 1).
     energy_scale : the ``"power"`` energy is Σ ((1 − cos θ_n)/energy_scale)^power.
     max_turn : largest turning angle θ_max allowed at any joint (radians), or None for no
@@ -57,7 +59,7 @@ class MoveParams:
 
     delta: float = float(np.pi / 100)
     p_single: float = 0.5
-    m_max: int = 75
+    m_max: int | None = None
     phi_max: float = 0.6
     l_cap: float = 0.5
     l_min: float = 0.03
@@ -89,6 +91,8 @@ class MoveParams:
             raise InvalidParameter("l_min", self.l_min, f"≤ l_cap = {self.l_cap:g}")
         if n_beads < 8:
             raise InvalidParameter("beads", n_beads, "an integer ≥ 8")
+        if self.m_max is None:
+            raise InvalidParameter("m_max", None, "set (MoveParams.for_beads(N) sets N/2)")
         if int(self.m_max) != self.m_max or not 1 <= self.m_max <= 20_000:
             raise InvalidParameter("m_max", self.m_max, "an integer in [1, 20,000] (the kernel "
                                    "caps it at N − 3, N − 4 for an open chain)")
@@ -100,6 +104,13 @@ class MoveParams:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+    def for_beads(self, n_beads: int) -> MoveParams:
+        """These parameters for a chain of ``n_beads`` beads: ``m_max`` = N/2 if unset (the
+        scale-free rule: sub-chains up to half the chain, whatever N)."""
+        if self.m_max is not None:
+            return self
+        return replace(self, m_max=max(1, int(n_beads) // 2))
 
     @property
     def cell(self) -> float:

@@ -34,7 +34,7 @@ benchmark knots (bench/RESULTS.md) and is not the default.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -60,6 +60,11 @@ class Schedule:
     t_relax, t_relax_end : first and last temperature of the relaxation stage.
     n_temps : number of temperatures of the tempering ladder (``tempering`` only).
 
+    Temperatures are k_B T in units of C per joint. A chain of N beads in equilibrium at T
+    carries a thermal excess δε ≈ N²T (about N·T of energy E_d over its ~2N degrees of
+    freedom, and ε = E_d·N), so the same schedule at another N means T ∝ 1/N²: the defaults are
+    the measured ones at the paper's N = 150 and :meth:`for_beads` scales them by (150/N)².
+
     The defaults were chosen by measurement (bench/RESULTS.md): the annealing stage is the
     paper's power law 3e-2 → 1e-6 with exponent 2 (a later end, 1e-7, shortens its hot part
     and ends 6_2 at ε ≈ 163 instead of 153); the relaxation stage takes 0.4 of the 30 M
@@ -76,6 +81,13 @@ class Schedule:
     t_relax: float = 5e-5
     t_relax_end: float = 1e-7
     n_temps: int = 6
+
+    def for_beads(self, n_beads: int, reference: int = 150) -> Schedule:
+        """The same cooling for a chain of ``n_beads`` beads: every temperature times
+        (reference/N)², so that the thermal excess δε ≈ N²T of each stage is unchanged."""
+        f = (reference / int(n_beads)) ** 2
+        return replace(self, t_start=self.t_start * f, t_end=self.t_end * f,
+                       t_relax=self.t_relax * f, t_relax_end=self.t_relax_end * f)
 
     def validate(self) -> None:
         if self.kind not in SCHEDULES:

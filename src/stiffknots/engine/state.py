@@ -89,7 +89,7 @@ class ChainState:
         self.ensemble = ensemble_of(ensemble, closed)
         self.ensemble.validate()
         self.closed = self.ensemble.closed
-        self.params = params or MoveParams()
+        self.params = (params or MoveParams()).for_beads(pos.shape[0])
         self.params.validate(pos.shape[0])
         if self.closed:
             bonds = np.linalg.norm(np.roll(pos, -1, axis=0) - pos, axis=1)
@@ -144,6 +144,7 @@ class ChainState:
         """Continue from the current chain with new parameters (e.g. another energy mode): the
         energy is recomputed from scratch, the counters are reset and, if ``seed`` is given,
         the generator is re-seeded."""
+        params = params.for_beads(self.n_beads)
         params.validate(self.n_beads)
         self._configure(params)
         for c in (self.counters, self.end_counters, self.slide_counters):

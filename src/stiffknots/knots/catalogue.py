@@ -5,10 +5,10 @@ Every knot of the standard tables with the invariants the mechanics of stiff kno
 
 * the crossing number :math:`n_c`;
 * the bridge number :math:`n`, which sets the lower bound on the bending energy through
-  Milnor's inequality :math:`2\\pi n \\le \\bar\\kappa` (§IV, eq. ``e:bridge_k``), hence
+  Milnor's inequality :math:`2\\pi n \\le \\bar\\kappa` (§IV, eq. ``eq. (9)``), hence
   :math:`\\epsilon^* \\ge 2\\pi^2 n^2`;
 * the braid index :math:`i`, which sets the circular-braid upper bound
-  :math:`\\epsilon^*_{CB} = 2\\pi^2 i^2` (§VI A, eq. ``e:epsilon*_CB``), with :math:`i \\ge n`;
+  :math:`\\epsilon^*_{CB} = 2\\pi^2 i^2` (§VI A, eq. ``eq. (30)``), with :math:`i \\ge n`;
 * a braid word (from which a 3D embedding is built) and a PD code;
 * the torus-knot parameters, where the knot is a torus knot.
 
@@ -65,6 +65,10 @@ _FIELDS = (
     "alexander_polynomial",
     "jones_polynomial",
     "conway_notation",
+    # read by stiffknots.knots.exterior (naming, chirality): kept as KnotInfo text in Knot.raw
+    "volume",
+    "ozsvath_szabo_tau_invariant",
+    "symmetry_type",
 )
 
 #: Friendly names (keys: lower case, without spaces, '-' or '_').
@@ -105,7 +109,7 @@ class Knot:
     bridge_number : int or None
         Bridge number :math:`n`: the minimal number of maxima of a height function over all
         configurations of the knot (§IV). Milnor's bound :math:`2\\pi n \\le \\bar\\kappa`
-        (eq. ``e:bridge_k``) gives :math:`\\epsilon^* \\ge 2\\pi^2 n^2`. ``None`` when KnotInfo
+        (eq. ``eq. (9)``) gives :math:`\\epsilon^* \\ge 2\\pi^2 n^2`. ``None`` when KnotInfo
         only gives an interval (see :attr:`bridge_number_range`).
     braid_index : int or None
         Braid index :math:`i`: the minimal number of strings of a closed braid representing the
@@ -175,7 +179,7 @@ class Knot:
     def n_equals_i(self) -> bool | None:
         """Whether the bridge number equals the braid index (the family of §VI C).
 
-        For these knots the bounds of eq. ``e:epsilon_ineq`` coincide and the ground state is
+        For these knots the bounds of eq. ``eq. (32)`` coincide and the ground state is
         the circular line-braid of multiplicity :math:`i`, :math:`\\epsilon^* = 2\\pi^2 i^2`.
         ``None`` when either invariant is unknown.
         """
@@ -709,7 +713,7 @@ def n_equals_i_knots(max_crossings: int = 10, min_crossings: int = 3) -> list[Kn
     """The knots of the :math:`n = i` family (§VI C) with crossing numbers in range.
 
     For these the ground state of the stiff knot is the circular line-braid of multiplicity
-    :math:`i`, with :math:`\\epsilon^* = 2\\pi^2 i^2` (eq. ``e:epsilon_ineq`` becomes an
+    :math:`i`, with :math:`\\epsilon^* = 2\\pi^2 i^2` (eq. ``eq. (32)`` becomes an
     equality). Knots with unknown n or i are left out. The unknot is included only with
     ``min_crossings=0``.
     """

@@ -1,6 +1,6 @@
 """Embedding of knots as an "80": a figure eight with a circle along one lobe (paper §VII).
 
-The paper's *80* (§VII, Figs. fig:MC and fig:MC_braids c, eq. for ε°_80) is the shape annealed
+The paper's *80* (§VII, Fig. 6 and Fig. 7 c, eq. for ε°_80) is the shape annealed
 for 5_2, 6_2 and 6_3: "composed of an 8 and a circle (0)", with "one point-braid and 3 double
 points", of thin-limit energy ε°_80 = (ε°_8^{1/2} + ε°_0^{1/2})² ≈ 142.1. In the Monte Carlo
 80s (e.g. ``results/paper_full/6_2/bead``) the circle lies along one lobe of a planar figure

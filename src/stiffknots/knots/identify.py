@@ -44,7 +44,20 @@ composite/link not tabulated).
 
 Chirality: topoly's answer is chiral (it tells the mirror images of 3_1 apart), but topoly's
 +/- convention is not guaranteed to coincide with KnotInfo's, and the paper's energies do not
-depend on chirality, so all names returned here are mirror-insensitive.
+depend on chirality, so all names returned by :func:`identify` are mirror-insensitive.
+
+One name per knot: :func:`identify_name`
+----------------------------------------
+:func:`identify_name` (and :func:`identify_details`, which also says how) breaks the HOMFLY-PT
+ties with invariants of the knot complement computed from a diagram of the polygon
+(:mod:`stiffknots.knots.exterior`): the hyperbolic volume (SnapPy) against KnotInfo's volume
+column, knot Floer homology, and the isometry of the complement with the complement of each
+candidate's KnotInfo diagram. Through 10 crossings every tie above is broken by the volume
+(torus and composite knots are not hyperbolic). It also gives the chirality relative to
+KnotInfo's diagram (``pd_notation``): ``'+'`` the same knot, ``'-'`` its mirror image, None for
+amphichiral knots, the unknot, composite knots, or when no invariant decides. topoly's own
++/- marks are not used for this: they follow the orientation of the diagrams of topoly's
+table, which matches KnotInfo's for some knots and not for others (measured in the tests).
 
 Open chains (paper §VIII, straight tails along z) are closed by
 :func:`close_open_chain_along_z` before identification.
@@ -54,8 +67,10 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 import re
 import threading
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -63,7 +78,10 @@ from stiffknots.errors import IdentificationError
 
 __all__ = [
     "IdentificationError",
+    "KnotNaming",
     "identify",
+    "identify_details",
+    "identify_name",
     "identify_code",
     "verify_knot",
     "normalize_name",
@@ -156,14 +174,45 @@ def normalize_name(name: str) -> str:
 
 
 @contextlib.contextmanager
+def _keep_stdin():
+    """Give file descriptor 0 back after a topoly call that closed it.
+
+    topoly's compiled HOMFLY-PT code (``liblmpoly``) closes descriptor 0 on every call, whatever
+    it is. Left closed, the next file or socket the process opens gets number 0 — and the next
+    call closes *that*: a checkpoint being written, or a Dask connection (seen as "fd 0 added
+    twice" and "Bad file descriptor" in a sweep's client). So descriptor 0 is duplicated before
+    the call and put back after it; if another thread took number 0 in the meantime (a socket
+    opened during the call), it is left alone — only then can the race still bite.
+    """
+    try:
+        saved = os.dup(0)
+    except OSError:  # already closed: hold number 0 with /dev/null for the call to close
+        fd = os.open(os.devnull, os.O_RDONLY)
+        if fd != 0:
+            os.close(fd)
+            yield
+            return
+        saved = os.dup(0)
+    try:
+        yield
+    finally:
+        try:
+            os.fstat(0)
+        except OSError:  # closed by the call: put the original back
+            os.dup2(saved, 0)
+        os.close(saved)
+
+
+@contextlib.contextmanager
 def _quiet():
-    """Silence Python-level output on stdout/stderr during topoly calls.
+    """Silence Python-level output on stdout/stderr during topoly calls, and keep descriptor
+    0 open (:func:`_keep_stdin`).
 
     Only the Python streams are redirected: redirecting the file descriptors themselves breaks
     topoly's compiled extension (it then closes a descriptor it does not own).  In all our
     tests the compiled code printed nothing.
     """
-    with _LOCK:
+    with _LOCK, _keep_stdin():
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             yield
 
@@ -388,3 +437,141 @@ def verify_knot(coords, expected: str, closed: bool = True) -> tuple[bool, str]:
     want = normalize_name(expected)
     cands = found.split("|")
     return (want in cands, found)
+
+
+# --------------------------------------------------------------------------------------------
+# one name per knot
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class KnotNaming:
+    """What :func:`identify_details` found.
+
+    Attributes
+    ----------
+    name : str or None
+        One catalogue name (mirror-insensitive, KnotInfo style), or None when a tie remains or
+        the knot is not in the tables.
+    candidates : tuple of str
+        The names still possible: ``(name,)`` when named; several when a tie remains; empty
+        when the polynomial is not in the tables.
+    chirality : {'+', '-', None}
+        Relative to KnotInfo's diagram of ``name`` (its ``pd_notation``): ``'+'`` the same
+        knot, ``'-'`` the mirror image; None for amphichiral knots, the unknot, composite
+        knots, ties, or when no invariant tells.
+    homfly : str
+        :func:`identify`'s answer (the HOMFLY-PT candidates, '|'-joined).
+    decided_by : tuple of str
+        The invariants that narrowed the candidates down, in order.
+    chirality_by : str
+        How the chirality was decided (or why not).
+    volume : float or None
+        Hyperbolic volume of the complement (SnapPy), None if not hyperbolic or not computed.
+    crossings : int or None
+        Crossings of the simplified diagram of the polygon (an upper bound on the crossing
+        number), None if not computed.
+    """
+
+    name: str | None
+    candidates: tuple[str, ...]
+    chirality: str | None
+    homfly: str
+    decided_by: tuple[str, ...] = ()
+    chirality_by: str = ""
+    volume: float | None = None
+    crossings: int | None = None
+
+    def as_dict(self) -> dict:
+        return {"knot": self.name, "candidates": list(self.candidates),
+                "chirality": self.chirality, "homfly_candidates": self.homfly,
+                "decided_by": list(self.decided_by), "chirality_by": self.chirality_by,
+                "volume": self.volume, "diagram_crossings": self.crossings}
+
+
+def identify_name(coords, closed: bool = True) -> tuple[str | None, tuple[str, ...], str | None]:
+    """One name for the knot type of a polygon: ``(name, candidates, chirality)``.
+
+    ``name`` is one catalogue name where the invariants can tell (HOMFLY-PT polynomial, then
+    the hyperbolic volume, knot Floer homology and the isometry class of the complement), None
+    where a tie remains (then ``candidates`` lists the names still possible) or the knot is not
+    in the tables (``candidates`` empty). ``chirality`` is ``'+'`` (KnotInfo's knot), ``'-'``
+    (its mirror image) or None (amphichiral, unknot, composite, tie, or undecided). See
+    :func:`identify_details` for how each was decided.
+    """
+    r = identify_details(coords, closed=closed)
+    return r.name, r.candidates, r.chirality
+
+
+def identify_details(coords, closed: bool = True) -> KnotNaming:
+    """:func:`identify_name` with the evidence: a :class:`KnotNaming`.
+
+    Raises
+    ------
+    IdentificationError
+        If the HOMFLY-PT polynomial cannot be computed (far too many crossings).
+    ValueError
+        If the polygon meets itself (no knot type).
+    """
+    from stiffknots.knots import exterior as ex
+
+    x = np.asarray(coords, dtype=np.float64)
+    if not closed:
+        x = close_open_chain_along_z(x)
+    homfly = identify(x, closed=True)
+    steps = ["HOMFLY-PT polynomial (topoly)"]
+    if homfly == "unknown":
+        return KnotNaming(None, (), None, homfly, tuple(steps),
+                          "no name: the polynomial is not in the tables (beyond 12 crossings, "
+                          "or an untabulated composite knot)")
+    cands = homfly.split("|")
+    if cands == ["0_1"]:
+        return KnotNaming("0_1", ("0_1",), None, homfly, tuple(steps), "the unknot")
+    d = ex.diagram_of(x)
+    vol = d.volume()
+    if len(cands) > 1:
+        kept = [c for c in cands if _volume_fits(ex, d, vol, c)]
+        if kept and len(kept) < len(cands):
+            steps.append("hyperbolic volume of the complement (SnapPy) vs KnotInfo")
+        cands = kept or cands
+    if len(cands) > 1:
+        kept = [c for c in cands if ex.hfk_matches(d, c) is not False]
+        if kept and len(kept) < len(cands):
+            steps.append("knot Floer homology (knot_floer_homology)")
+        cands = kept or cands
+    if len(cands) > 1 and vol is not None:
+        kept = [c for c in cands if "#" not in c and ex.isometry_orientations(d, c)]
+        if kept and len(kept) < len(cands):
+            steps.append("isometry of the complements (SnapPy)")
+        cands = kept or cands
+    if len(cands) == 1 and "#" not in cands[0]:
+        want = ex.knotinfo_volume(_knot(cands[0]))
+        if vol is not None and want is not None and not ex.volumes_match(vol, want):
+            return KnotNaming(None, (), None, homfly, tuple(steps),
+                              f"no name: the HOMFLY-PT polynomial is that of {cands[0]} but the "
+                              f"volume {vol:.6f} is not its {want:.6f} (a knot beyond the "
+                              "tables?)", vol, d.crossings)
+    if len(cands) > 1:
+        return KnotNaming(None, tuple(cands), None, homfly, tuple(steps),
+                          "not decided: the knot type is not decided", vol, d.crossings)
+    name = cands[0]
+    chir, how = ex.chirality_of(d, name)
+    return KnotNaming(name, (name,), chir, homfly, tuple(steps), how, vol, d.crossings)
+
+
+def _knot(name: str):
+    from stiffknots.knots.catalogue import get_knot
+
+    return get_knot(name)
+
+
+def _volume_fits(ex, d, vol: float | None, name: str) -> bool:
+    """Is the measured volume (None: not hyperbolic) that of the candidate? A non-hyperbolic
+    candidate also needs positive evidence: a diagram that splits as a connected sum for a
+    composite knot, equal knot Floer homology for a torus knot."""
+    if "#" in name:
+        return vol is None and d.deconnects() >= 2
+    want = ex.knotinfo_volume(_knot(name))
+    if not ex.volumes_match(vol, want):
+        return False
+    return want is not None or ex.hfk_matches(d, name) is True

@@ -12,7 +12,7 @@ __all__ = ["knot_summary"]
 def knot_summary(name: str) -> dict:
     """Catalogue data and bounds of one knot (closed, open, restricted curvature).
 
-    The closed bounds are 2π²n² ≤ ε* ≤ 2π² min(α²n², i²) (eqs. (13), (24)); when n = i the
+    The closed bounds are 2π²n² ≤ ε* ≤ 2π² min(α²n², i²) (eqs. (13), (31)); when n = i the
     ground state is the i-times covered circle, ε* = 2π²i² (§VI C).
     """
     k = get_knot(name)

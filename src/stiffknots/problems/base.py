@@ -14,6 +14,13 @@ Verification, in one place, of every replica:
 * the engine's own checks (:func:`~stiffknots.engine.driver.make_result`): the energy
   recomputed from scratch equals the incremental one, bonds are unit (1e-10), open chains stay
   clamped, the exclusion rule holds;
+* the final minimiser (:func:`~stiffknots.engine.polish.polish`, on by default): the Monte
+  Carlo's best chain is taken to the local minimum of E_d with unit bonds and the exclusion
+  rule held exactly and no strand passage on the way (its own proof and guard); the replica's
+  numbers are those of the polished chain, and ``polish`` records the energy before, the KKT
+  residual, the iterations and whether it converged (not applied where the energy is not the
+  paper's E_d — the restricted-curvature plan — or where the ends move: the fixed-force
+  ensemble);
 * the knot type. Every starting chain is checked before any work: its HOMFLY-PT polynomial
   (:func:`~stiffknots.knots.identify.homfly_code`, chiral; an open chain is closed along its z
   axis first) must be the requested knot's in topoly's table, or — for a knot beyond the table
@@ -62,6 +69,7 @@ class Replica(ReplicaResult):
         identifies.
     knot_verified : True when the final chain has the HOMFLY-PT polynomial of its start.
     knot_check : how the type was confirmed (module docstring).
+    polish : what the final minimiser did (module docstring; None if it was not applied).
     start : the starting embedding (``braid``, ``cage``, ``eighty``, ``open``).
     observables : problem-specific numbers (e.g. ``length_over_R`` of §IX D), also
         readable as attributes (``r.length_over_R``).
@@ -72,6 +80,7 @@ class Replica(ReplicaResult):
     start: str | None = None
     observables: dict = field(default_factory=dict)
     knot_check: str | None = None
+    polish: dict | None = None
 
     def __getattr__(self, name: str):
         # the problem's observables read as attributes (``r.length_over_R``)
@@ -92,9 +101,30 @@ class Job:
     knot: str
     start: str = "braid"
     start_code: str = ""  # HOMFLY-PT polynomial of the starting chain (topoly's code)
+    polish: bool = True  # run the final minimiser on the best chain
     checkpoint: Path | None = None
     resume: bool = False
     checkpoint_seconds: float | None = None
+
+
+DEFAULT_MOVES = AnnealSettings.moves  # 30 M at N = 150: relaxation + annealing (schedules.py)
+
+
+def default_moves(n_beads: int) -> int:
+    """The default budget of a replica of N beads: 30 M moves at N = 150, × (N/150)² (the
+    temperatures scale as 1/N², :meth:`Schedule.for_beads`; the moves per bead as N)."""
+    return max(1_000_000, round(DEFAULT_MOVES * (int(n_beads) / 150) ** 2))
+
+
+def observe_shape(r: Replica, params) -> None:
+    """Classify a closed replica's chain (:func:`stiffknots.analysis.classify`, §VII) with the
+    exclusion distance of its run; store ``shape`` ('CB2', '4C', '80', 'other'), ``label``,
+    ``multiplicity`` and ``shape_reason`` in its observables."""
+    from stiffknots.analysis import classify
+
+    s = classify(r.coords, d=params.w if params.exclusion == "tube" else params.d)
+    r.observables.update(shape=f"CB{s.multiplicity}" if s.label == "CB" else s.label,
+                         label=s.label, multiplicity=s.multiplicity, shape_reason=s.reason)
 
 
 def knot_code(coords: np.ndarray, closed: bool = True) -> str:
@@ -141,13 +171,63 @@ def run_job(job: Job) -> Replica:
         raw = run_tempering(job.coords, job.settings, job.seed, job.replica, **kw)
     else:
         raw = run_replica(job.coords, job.settings, job.seed, job.replica, progress=report, **kw)
-    code = knot_code(raw.coords, job.settings.closed)
+    fields, info = polish_run(vars(raw), job.settings) if job.polish else (vars(raw), None)
+    code = knot_code(fields["coords"], job.settings.closed)
     ok = code == job.start_code
     found = job.knot if ok else identify_code(code)
     check = "HOMFLY-PT polynomial unchanged from the starting chain" if ok else (
         "HOMFLY-PT polynomial differs from the starting chain's")
-    return Replica(**vars(raw), knot=found, knot_verified=ok, start=job.start,
-                   knot_check=check)
+    return Replica(**fields, knot=found, knot_verified=ok, start=job.start,
+                   knot_check=check, polish=info)
+
+
+def polishable(settings: AnnealSettings) -> bool:
+    """Does the final minimiser apply? (the paper's energy E_d, ends that do not move)"""
+    return (settings.plan == "anneal" and settings.params.energy == "bending"
+            and settings.ensemble.kind in ("closed", "extension"))
+
+
+def polish_run(fields: dict, settings: AnnealSettings) -> tuple[dict, dict | None]:
+    """The numbers of a run after the final minimiser (:func:`stiffknots.engine.polish.polish`)
+    took its best chain to the local minimum; and what the minimiser did.
+
+    Every number that depends on the chain is recomputed from the polished coordinates (the
+    energy from scratch), so the verification that follows applies to the polished chain.
+    """
+    from stiffknots.engine.polish import polish
+    from stiffknots.engine.prims import (
+        check_state,
+        energy_chain,
+        min_nonadjacent_segment_distance,
+        turning_cosines,
+    )
+
+    if not polishable(settings):
+        return fields, None
+    p = settings.params
+    closed = settings.closed
+    res = polish(fields["coords"], closed=closed, exclusion=p.exclusion, d=p.d, w=p.w)
+    x = res.pos
+    e = float(energy_chain(x, not closed))
+    n = len(x)
+    le = float(n - 1 - (x[-1, 2] - x[0, 2])) if not closed else None
+    out = dict(fields)
+    bonds = (np.roll(x, -1, axis=0) - x) if closed else np.diff(x, axis=0)
+    mode = 0 if p.exclusion == "bead" else 1
+    out.update(
+        coords=x, energy=e, energy_recomputed=e, epsilon=e * (n if closed else le),
+        max_bond_error=float(np.max(np.abs(np.linalg.norm(bonds, axis=1) - 1.0))),
+        exclusion_margin=-float(check_state(x, mode, p.d, p.w, not closed)),
+        min_segment_distance=float(min_nonadjacent_segment_distance(x, not closed)),
+        max_turn=float(np.max(np.arccos(np.clip(turning_cosines(x, not closed), -1, 1)))))
+    if not closed:
+        out["total_energy"] = e
+    info = {"epsilon_before": fields["epsilon"], "energy_before": res.energy_before,
+            "kkt_residual": res.kkt_residual, "relative_kkt": res.relative_kkt,
+            "iterations": res.iterations, "converged": res.converged, "reason": res.reason,
+            "n_active": res.n_active, "strand_gap": res.strand_gap,
+            "gap_force": res.gap_force, "seconds": res.seconds}
+    return out, info
 
 
 @dataclass
@@ -173,6 +253,9 @@ class ReplicaSet:
     interrupted: bool = False
     version: str = __version__
     bounds: dict = field(default_factory=dict)
+    converged: bool | None = None
+    convergence: str = ""
+    rounds: int = 1
 
     @property
     def best(self) -> Replica:
@@ -189,6 +272,8 @@ class ReplicaSet:
         ok = bool(self.replicas) and all(r.knot_verified for r in self.replicas)
         return {"problem": self.problem, "knot": self.knot, "beads": self.beads,
                 "seed": self.seed, **self.physics(), "bounds": self.bounds, "knot_verified": ok,
+                "converged": self.converged, "convergence": self.convergence,
+                "rounds": self.rounds,
                 "settings": self.settings, "wall_time": self.wall_time,
                 "interrupted": self.interrupted, "version": self.version,
                 "replicas": [r.summary() for r in self.replicas]}
@@ -237,11 +322,31 @@ class Problem:
     knot_name: str
     beads: int
     seed: int
+    replicas: int
+    #: the most rounds of ``replicas`` replicas :func:`solve` runs until the verdict is
+    #: "converged" (1: a fixed budget)
+    rounds: int = 1
+    #: converged: the lowest state reached by at least ``agree`` replicas …
+    agree: int = 2
+    #: … of the same shape and value within ``rel_tol`` (relative) of the lowest
+    rel_tol: float = 1e-3
 
-    def jobs(self) -> list[Job]:
+    def jobs(self, first: int = 0) -> list[Job]:
+        """The jobs of replicas ``first`` … ``first + replicas − 1`` (one round)."""
         raise NotImplementedError
 
+    def state_of(self, r: Replica) -> tuple[str, float]:
+        """The state a finished replica reached: (shape label, value); replicas of the same
+        label and value within ``rel_tol`` are one state (see :func:`verdict`)."""
+        return "", self.sort_key(r)
+
     # -- helpers of the subclasses' constructors and jobs -----------------------------------
+
+    def _verdict_rule(self, rounds: int, agree: int, rel_tol: float) -> None:
+        """The convergence rule (:func:`verdict`), validated."""
+        self.rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)
+        self.agree = V.integer("agree", agree, 1, V.MAX_REPLICAS)
+        self.rel_tol = V.number("rel_tol", rel_tol, 0, 1, lo_open=True)
 
     def _setup(self, knot: str, replicas: int, seed: int, beads: int | None = None) -> None:
         """The knot (catalogue entry and name), replicas, seed and beads, validated."""
@@ -254,6 +359,10 @@ class Problem:
         if beads is not None:
             self.beads = V.beads(beads)
 
+    def _start(self, r: int) -> str:
+        """The starting embedding of replica r (the per-replica starts, round-robin)."""
+        return self.starts[r % len(self.starts)]
+
     def _closed_starts(self, start) -> None:
         """One starting embedding per replica (``self.starts``), their chains and their
         checked knot polynomials."""
@@ -265,17 +374,23 @@ class Problem:
         self.codes = {st: start_code(self.knot_name, x, True, st)
                       for st, x in self.chains.items()}
 
+    #: run the final minimiser on every replica's best chain
+    polish: bool = True
+
     def _replica_jobs(self, settings: AnnealSettings, coords: Callable[[int], np.ndarray],
                       start: Callable[[int], str], code: Callable[[int], str],
                       checkpoint_dir=None, resume: bool = False,
-                      checkpoint_seconds: float | None = None) -> list[Job]:
-        """One job per replica, its seed derived from the problem's seed."""
-        return [Job(replica=r, seed=s, coords=coords(r), settings=settings, knot=self.knot_name,
-                    start=start(r), start_code=code(r),
+                      checkpoint_seconds: float | None = None, first: int = 0) -> list[Job]:
+        """One job per replica ``first`` … ``first + replicas − 1``; replica r's seed is the
+        r-th seed derived from the problem's seed, whatever the round it runs in."""
+        seeds = replica_seeds(self.seed, first + self.replicas)
+        return [Job(replica=r, seed=seeds[r], coords=coords(r), settings=settings,
+                    knot=self.knot_name, start=start(r), start_code=code(r),
+                    polish=self.polish,
                     checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
                                 if checkpoint_dir is not None else None),
                     resume=resume, checkpoint_seconds=checkpoint_seconds)
-                for r, s in enumerate(replica_seeds(self.seed, self.replicas))]
+                for r in range(first, first + self.replicas)]
 
     def bounds(self) -> dict:
         return {}
@@ -293,12 +408,36 @@ class Problem:
         return {}
 
 
+def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
+    """Has the search converged? True when the lowest state — the best replica's shape, and a
+    value within ``problem.rel_tol`` of the lowest — was reached by at least
+    ``problem.agree`` replicas; and a sentence saying why (or why not)."""
+    if not replicas:
+        return False, "no replica finished"
+    states = [problem.state_of(r) for r in replicas]
+    best = min(range(len(states)), key=lambda k: states[k][1])
+    label, value = states[best]
+    tol = problem.rel_tol * max(abs(value), 1e-300)
+    hits = sum(1 for lab, v in states if lab == label and v - value <= tol)
+    name = f"{label}, {value:.6g}" if label else f"{value:.6g}"
+    if hits >= problem.agree:
+        return True, (f"the lowest state ({name}) was reached by {hits} of {len(replicas)} "
+                      f"replicas (within {problem.rel_tol:.0e})")
+    return False, (f"the lowest state ({name}) was reached by {hits} of {len(replicas)} "
+                   f"replicas; {problem.agree} needed (within {problem.rel_tol:.0e})")
+
+
 def solve(problem: Problem, *, workers: int | None = None,
           on_replica_done: Callable[[Replica], None] | None = None,
           on_progress: Callable[[dict], None] | None = None,
           isolate: bool = False) -> ReplicaSet:
     """Run every job of ``problem`` on ``workers`` processes (default: all cores) and return
     its verified replicas, best first.
+
+    The replicas run in rounds of ``problem.replicas``; after each round the verdict
+    (:func:`verdict`) decides: converged — stop; not converged — run another round, up to
+    ``problem.rounds`` (easy knots stop early, hard ones get more). The result carries
+    ``converged`` and the reason.
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
@@ -313,9 +452,7 @@ def solve(problem: Problem, *, workers: int | None = None,
     TopologyChangedError
         If a replica ends with another knot type (never expected: a bug, never a data point).
     """
-    jobs = problem.jobs()
-    V.checkpoints(jobs)  # a corrupt or foreign checkpoint to resume: CheckpointError now
-    nw = workers or default_workers(len(jobs))
+    nw = workers or default_workers(problem.replicas)
     t0 = time.perf_counter()
 
     def done(r: Replica) -> None:
@@ -323,17 +460,31 @@ def solve(problem: Problem, *, workers: int | None = None,
         if on_replica_done is not None:
             on_replica_done(r)
 
-    results, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress,
+    results: list[Replica] = []
+    interrupted = False
+    converged, reason, rounds = False, "no replica finished", 0
+    for rnd in range(max(1, problem.rounds)):
+        jobs = problem.jobs(first=rnd * problem.replicas)
+        V.checkpoints(jobs)  # a corrupt or foreign checkpoint to resume: CheckpointError now
+        new, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress,
                                     isolate=isolate)
+        bad = [r for r in new if not r.knot_verified]
+        if bad:
+            raise TopologyChangedError(
+                f"{len(bad)} replica(s) of {problem.knot_name} ended as "
+                f"{', '.join(str(r.knot) for r in bad)}; this is a bug in stiffknots, please "
+                f"report it with the seed {problem.seed} and the settings")
+        results += new
+        rounds = rnd + 1
+        converged, reason = verdict(problem, results)
+        if interrupted or converged:
+            break
+    if not converged and not interrupted and problem.rounds > 1:
+        reason += f" after {rounds} rounds (the budget)"
     results.sort(key=problem.sort_key)
-    bad = [r for r in results if not r.knot_verified]
-    if bad:
-        raise TopologyChangedError(
-            f"{len(bad)} replica(s) of {problem.knot_name} ended as "
-            f"{', '.join(str(r.knot) for r in bad)}; this is a bug in stiffknots, please "
-            f"report it with the seed {problem.seed} and the settings")
     return problem.result_type(
         knot=problem.knot_name, beads=problem.beads, seed=problem.seed,
         settings=problem.settings_dict(), replicas=results,
         wall_time=time.perf_counter() - t0, interrupted=interrupted,
-        bounds=problem.bounds(), **problem.result_fields(results))
+        bounds=problem.bounds(), converged=converged, convergence=reason, rounds=rounds,
+        **problem.result_fields(results))

@@ -19,9 +19,17 @@ from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter
 from stiffknots.problems import validate as V
-from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve
+from stiffknots.problems.base import (
+    Job,
+    Problem,
+    Replica,
+    ReplicaSet,
+    default_moves,
+    observe_shape,
+    solve,
+)
 
-DEFAULT_MOVES = AnnealSettings.moves  # 30 M: relaxation + annealing (schedules.py)
+DEFAULT_ROUNDS = 4  # rounds of replicas until the lowest state is reached twice
 
 
 @dataclass
@@ -45,16 +53,26 @@ class ClosedAnneal(Problem):
 
     result_type = AnnealResult
 
-    def __init__(self, knot: str, beads: int = 150, moves: int = DEFAULT_MOVES,
+    def __init__(self, knot: str, beads: int = 150, moves: int | None = None,
                  replicas: int = 2, seed: int = 0, *, schedule: Schedule | None = None,
                  params: MoveParams | None = None, quench_fraction: float = 0.1,
                  target_epsilon: float | None = None,
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0,
-                 start: str | Sequence[str] = "all"):
+                 start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
+                 agree: int = 2, rel_tol: float = 1e-3, initial=None, polish: bool = True):
         from stiffknots.theory.bounds import closed_bounds
 
+        if initial is not None:  # a curve of the user: named, resampled and checked first
+            from stiffknots.problems.relax import prepare_curve
+
+            ex = (params.exclusion if params is not None else "bead")
+            wl = params.w / beads if params is not None and ex == "tube" else None
+            x, knot, self.naming, p0 = prepare_curve(initial, beads, ex, wl, knot)
+            params = params or p0
         self._setup(knot, replicas, seed, beads)
+        self._verdict_rule(rounds, agree, rel_tol)
+        self.polish = bool(polish)
         if resume and checkpoint_dir is None:
             raise InvalidParameter("checkpoint_dir", None, "given when resume=True",
                                    "the folder of the checkpoints")
@@ -62,35 +80,51 @@ class ClosedAnneal(Problem):
             V.number("checkpoint_seconds", checkpoint_seconds, 0, lo_open=True)
         if target_epsilon is not None:
             V.number("target_epsilon", target_epsilon)
-        self.settings = AnnealSettings(moves=V.moves(moves), schedule=schedule or Schedule(),
-                                       params=params or MoveParams(),
+        self.settings = AnnealSettings(moves=V.moves(default_moves(self.beads) if moves is None
+                                                     else moves),
+                                       schedule=schedule or Schedule().for_beads(self.beads),
+                                       params=(params or MoveParams()).for_beads(self.beads),
                                        quench_fraction=quench_fraction,
                                        target_epsilon=target_epsilon)
         self.settings.validate()
         self.settings.params.validate(self.beads)
-        self._closed_starts(start)
+        if initial is None:
+            self._closed_starts(start)
+        else:
+            from stiffknots.problems.base import start_code
+
+            self.starts = ["file"]
+            self.chains = {"file": x.coords}
+            self.codes = {"file": start_code(self.knot_name, x.coords, True, "file")}
         self.checkpoint_dir = checkpoint_dir
         self.resume = resume
         self.checkpoint_seconds = checkpoint_seconds
         self._bounds = closed_bounds(self.knot.bridge_number, self.knot.braid_index)
 
-    def jobs(self) -> list[Job]:
-        return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
-                                  lambda r: self.starts[r], lambda r: self.codes[self.starts[r]],
-                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds)
+    def jobs(self, first: int = 0) -> list[Job]:
+        return self._replica_jobs(self.settings, lambda r: self.chains[self._start(r)],
+                                  self._start, lambda r: self.codes[self._start(r)],
+                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds,
+                                  first)
+
+    def state_of(self, r: Replica) -> tuple[str, float]:
+        return r.observables["shape"], r.epsilon
+
+    def observe(self, r: Replica) -> None:
+        observe_shape(r, self.settings.params)
 
     def bounds(self) -> dict:
         b = self._bounds
         return {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
 
     def settings_dict(self) -> dict:
-        return {**self.settings.as_dict(), "start": self.starts}
+        return {**self.settings.as_dict(), "start": self.starts, "polish": self.polish}
 
 
 def anneal(
     knot: str,
     beads: int = 150,
-    moves: int = DEFAULT_MOVES,
+    moves: int | None = None,
     replicas: int = 2,
     seed: int = 0,
     *,
@@ -104,6 +138,12 @@ def anneal(
     resume: bool = False,
     checkpoint_seconds: float | None = 60.0,
     start: str | Sequence[str] = "all",
+    rounds: int = DEFAULT_ROUNDS,
+    agree: int = 2,
+    rel_tol: float = 1e-3,
+    on_progress: Callable[[dict], None] | None = None,
+    initial=None,
+    polish: bool = True,
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -111,12 +151,14 @@ def anneal(
     ----------
     knot : knot name in any usual spelling ('4_1', '4.1', 'K11a1', 'T(2,3)').
     beads : number of beads N (bond length 1, so the chain length L = N).
-    moves : attempted moves per replica (annealing plus the final quench).
+    moves : attempted moves per replica (annealing plus the final quench); default
+        :func:`default_moves` (30 M at N = 150, scaled as N²).
     replicas : independent replicas; they run in parallel on ``workers`` processes
         (default: all cores).
     seed : user seed; replica seeds are derived from it (recorded in every result).
     schedule, params : cooling schedule and move/exclusion parameters (defaults documented in
-        :class:`Schedule` and :class:`MoveParams`).
+        :class:`Schedule` and :class:`MoveParams`; the default schedule's temperatures scale
+        as (150/N)² and the default m_max is N/2, so that the same search runs at any N).
     quench_fraction : fraction of the moves spent in the final T = 0 quench.
     target_epsilon : if given, each replica records the wall time at which ε first fell below.
     on_replica_done : callback called in the parent process as each replica finishes.
@@ -134,6 +176,19 @@ def anneal(
         that exists for the knot among braid and cage, shared round-robin among the
         replicas), or one start per replica (a sequence of ``replicas`` names). Recorded in
         the settings and in every replica.
+    rounds, agree, rel_tol : the convergence rule: after each round of ``replicas`` replicas,
+        the run stops when the lowest state (its shape class and ε within ``rel_tol``) was
+        reached by at least ``agree`` replicas, and otherwise runs another round, up to
+        ``rounds`` rounds; ``rounds=1`` is a fixed budget. The result says ``converged`` and
+        why (:func:`stiffknots.problems.base.verdict`).
+    on_progress : receives progress records of the running replicas (moves done, best ε).
+    initial : a closed curve (:class:`~stiffknots.chain.Chain` of any bond lengths) to start
+        every replica from instead of the built-in embeddings: it is named (``knot`` is then
+        checked against it), resampled to ``beads`` unit bonds with its type kept and checked
+        (:func:`stiffknots.problems.relax.prepare_curve`).
+    polish : take every replica's best chain to its local minimum with the final minimiser
+        (:func:`stiffknots.engine.polish.polish`; unit bonds and exclusion held exactly, no
+        strand passage); its report is in each replica's ``polish``.
 
     Returns
     -------
@@ -150,5 +205,7 @@ def anneal(
     problem = ClosedAnneal(knot, beads, moves, replicas, seed, schedule=schedule, params=params,
                            quench_fraction=quench_fraction, target_epsilon=target_epsilon,
                            checkpoint_dir=checkpoint_dir, resume=resume,
-                           checkpoint_seconds=checkpoint_seconds, start=start)
-    return solve(problem, workers=workers, on_replica_done=on_replica_done)
+                           checkpoint_seconds=checkpoint_seconds, start=start, rounds=rounds,
+                           agree=agree, rel_tol=rel_tol, initial=initial, polish=polish)
+    return solve(problem, workers=workers, on_replica_done=on_replica_done,
+                 on_progress=on_progress)

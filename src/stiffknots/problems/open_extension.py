@@ -113,32 +113,38 @@ class OpenExtension(Problem):
 
     def __init__(self, knot: str, excess_length: int = 80, moves: int = DEFAULT_OPEN_MOVES,
                  replicas: int = 2, seed: int = 0, *, params: MoveParams | None = None,
-                 schedule: Schedule | None = None, quench_fraction: float = 0.1):
+                 schedule: Schedule | None = None, quench_fraction: float = 0.1,
+                 polish: bool = True):
         from stiffknots.theory.bounds import open_bounds
 
         self._setup(knot, replicas, seed)
+        self.polish = bool(polish)
         self.excess_length = V.integer("excess_length", excess_length, V.MIN_EXCESS_LENGTH,
                                        V.MAX_EXCESS_LENGTH)
-        self.settings = AnnealSettings(moves=V.moves(moves), schedule=schedule or Schedule(),
-                                       params=params or MoveParams(),
+        self.coords = open_chain(self.knot_name, self.excess_length, seed=self.seed)
+        self.beads = len(self.coords)
+        self.settings = AnnealSettings(moves=V.moves(moves),
+                                       schedule=schedule or Schedule().for_beads(self.beads),
+                                       params=(params or MoveParams()).for_beads(self.beads),
                                        quench_fraction=quench_fraction,
                                        ensemble=Ensemble("extension"))
         self.settings.validate()
-        self.coords = open_chain(self.knot_name, self.excess_length, seed=self.seed)
-        self.beads = len(self.coords)
         self.settings.params.validate(self.beads)
         self.code = start_code(self.knot_name, self.coords, False, "open")
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)
 
-    def jobs(self) -> list[Job]:
+    def jobs(self, first: int = 0) -> list[Job]:
         return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open",
-                                  lambda r: self.code)
+                                  lambda r: self.code, first=first)
+
+    def state_of(self, r: Replica) -> tuple[str, float]:
+        return open_shape(r.coords)["label"], self.sort_key(r)
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}
 
     def settings_dict(self) -> dict:
-        return self.settings.as_dict()
+        return self.settings.as_dict() | {"polish": self.polish}
 
     def sort_key(self, r: Replica) -> float:
         return r.energy
@@ -151,7 +157,8 @@ def anneal_open(knot: str, excess_length: int = 80, moves: int = DEFAULT_OPEN_MO
                 replicas: int = 2, seed: int = 0, *, params: MoveParams | None = None,
                 schedule: Schedule | None = None, workers: int | None = None,
                 quench_fraction: float = 0.1,
-                on_replica_done: Callable[[Replica], None] | None = None) -> OpenResult:
+                on_replica_done: Callable[[Replica], None] | None = None,
+                polish: bool = True) -> OpenResult:
     """Anneal an open knot at fixed excess length L_e (paper §VIII) and verify it.
 
     Parameters
@@ -173,7 +180,7 @@ def anneal_open(knot: str, excess_length: int = 80, moves: int = DEFAULT_OPEN_MO
         If the closure along z of any replica is not the requested knot (never expected).
     """
     problem = OpenExtension(knot, excess_length, moves, replicas, seed, params=params,
-                            schedule=schedule, quench_fraction=quench_fraction)
+                            schedule=schedule, quench_fraction=quench_fraction, polish=polish)
     return solve(problem, workers=workers, on_replica_done=on_replica_done)
 
 

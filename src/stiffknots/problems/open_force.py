@@ -135,6 +135,7 @@ class OpenForce(Problem):
         from stiffknots.theory.bounds import open_bounds
 
         self._setup(knot, replicas, seed)
+        self.polish = False  # the ends move at fixed force: the minimiser holds them fixed
         self.force = V.number("force", force, 0, lo_open=True)
         V.number("end_fraction", end_fraction, 0, 1, lo_open=True)
         V.number("slide_fraction", slide_fraction, 0, 1, lo_open=True)
@@ -154,7 +155,7 @@ class OpenForce(Problem):
                          "end_m_max": end_m_max}
         self.settings = AnnealSettings(
             moves=V.moves(moves), schedule=schedule or default_force_schedule(),
-            params=params or MoveParams(), quench_fraction=quench_fraction,
+            params=(params or MoveParams()).for_beads(self.beads), quench_fraction=quench_fraction,
             ensemble=Ensemble("force", force=self.force, **self.moves_kw))
         self.settings.validate()
         self.settings.params.validate(self.beads)
@@ -163,10 +164,10 @@ class OpenForce(Problem):
         self.checkpoint_seconds = checkpoint_seconds
         self._bounds = open_bounds(self.knot.bridge_number, self.knot.braid_index)
 
-    def jobs(self) -> list[Job]:
+    def jobs(self, first: int = 0) -> list[Job]:
         return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "open",
                                   lambda r: self.code, self.checkpoint_dir, self.resume,
-                                  self.checkpoint_seconds)
+                                  self.checkpoint_seconds, first)
 
     def bounds(self) -> dict:
         return {"eps_e_lower": self._bounds.lower, "eps_e_upper": self._bounds.upper}

@@ -41,6 +41,18 @@ def report(info: dict) -> None:
             _PROGRESS(info)
 
 
+@contextlib.contextmanager
+def reporting_to(callback: Callable[[dict], None] | None):
+    """Send the progress records of the jobs run in this process (:func:`report`) to
+    ``callback`` while the block runs (e.g. a Dask worker forwarding them to its client)."""
+    global _PROGRESS
+    old, _PROGRESS = _PROGRESS, callback
+    try:
+        yield
+    finally:
+        _PROGRESS = old
+
+
 def _die_with_parent(parent: int) -> None:
     """Make this process exit when the parent ``parent`` dies."""
     try:

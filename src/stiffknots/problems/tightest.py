@@ -96,6 +96,7 @@ class Tightest(Problem):
         from stiffknots.theory.bounds import restricted_curvature_bounds
 
         self._setup(knot, replicas, seed, beads)
+        self.polish = False  # the power energy of §IX D is not the minimiser's E_d
         if not powers:
             V.integer("powers", None)
         powers = tuple(V.integer("powers", p, 1, 1024) for p in powers)
@@ -104,17 +105,20 @@ class Tightest(Problem):
             kw["d"] = d
         if w is not None and exclusion == "tube":
             kw["w"] = w
-        self.settings = AnnealSettings(moves=V.moves(moves), schedule=Schedule(),
-                                       params=MoveParams(**kw), plan="tight", powers=powers)
+        self.settings = AnnealSettings(moves=V.moves(moves),
+                                       schedule=Schedule().for_beads(self.beads),
+                                       params=MoveParams(**kw).for_beads(self.beads),
+                                       plan="tight", powers=powers)
         self.settings.validate()
         self.settings.params.validate(self.beads)
         self._closed_starts(start)
         self._bounds = restricted_curvature_bounds(self.knot.bridge_number,
                                                    self.knot.braid_index, R=1.0)
 
-    def jobs(self) -> list[Job]:
-        return self._replica_jobs(self.settings, lambda r: self.chains[self.starts[r]],
-                                  lambda r: self.starts[r], lambda r: self.codes[self.starts[r]])
+    def jobs(self, first: int = 0) -> list[Job]:
+        return self._replica_jobs(self.settings, lambda r: self.chains[self._start(r)],
+                                  self._start, lambda r: self.codes[self._start(r)],
+                                  first=first)
 
     def bounds(self) -> dict:
         b = self._bounds

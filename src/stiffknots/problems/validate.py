@@ -23,6 +23,7 @@ MAX_REPLICAS = 1_000
 MAX_SEED = 2**63 - 1
 MIN_EXCESS_LENGTH = 8
 MAX_EXCESS_LENGTH = 10_000
+MAX_ROUNDS = 100
 
 
 def integer(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:

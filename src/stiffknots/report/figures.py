@@ -5,9 +5,9 @@ return the axis they drew on; :func:`save_figure` writes a figure (or the figure
 file and closes it. The bounds are those of :mod:`stiffknots.theory.bounds` (Gallotti &
 Pierre-Louis, "Stiff knots", PRE 2007):
 
-* closed knots (e:epsilon_sup_n2), (e:epsilon_ineq_0):
+* closed knots (eq. (13)), (eq. (31)):
   ``2 pi^2 n^2 <= eps* <= 2 pi^2 min(alpha^2 n^2, i^2)``;
-* open knots (e:mu_ineq), ``n1 = n - 1``, ``i1 = i - 1``:
+* open knots (eq. (45)), ``n1 = n - 1``, ``i1 = i - 1``:
   ``2 pi^2 n1^2 <= mu* L_e^2 / C <= 2 pi^2 min(alpha^2 n1^2, i1^2)``.
 """
 
@@ -274,7 +274,7 @@ def plot_eps_vs_n2(points, ax=None, *, bounds: bool = True, labels: bool = True,
     ax : matplotlib Axes, optional
     bounds : bool
         Draw the general bounds as lines against ``n^2``: the lower bound
-        ``eps = 2 pi^2 n^2`` (e:epsilon_sup_n2) and the upper bound of the point braid and
+        ``eps = 2 pi^2 n^2`` (eq. (13)) and the upper bound of the point braid and
         loops, ``eps_PBL = 2 pi^2 alpha^2 n^2 = 4 n^2 eps_loop`` (valid for every knot), and for
         each ``(n, i)`` present the interval ``[2 pi^2 n^2, 2 pi^2 min(alpha^2 n^2, i^2)]``
         of :func:`~stiffknots.theory.bounds.closed_bounds`, with the circular braid
@@ -371,7 +371,7 @@ def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
     bounds : bool
         For each ``(n, i)`` present, the lines ``mu = lower / L_e^2`` (solid) and
         ``mu = upper / L_e^2`` (dashed) of :func:`~stiffknots.theory.bounds.open_bounds`
-        (e:mu_ineq), i.e. ``2 pi^2 n1^2`` and ``2 pi^2 min(alpha^2 n1^2, i1^2)`` with
+        (eq. (45)), i.e. ``2 pi^2 n1^2`` and ``2 pi^2 min(alpha^2 n1^2, i1^2)`` with
         ``n1 = n - 1``, ``i1 = i - 1``; one line when they coincide (the open trefoil:
         ``mu* = 2 pi^2 / L_e^2``).
     labels, title : as for :func:`plot_eps_vs_n2`.

@@ -1,7 +1,7 @@
 """Pictures of chains: one consistent style for every figure of the package.
 
 Every chain (closed knot or open string) is drawn as a shaded tube around its centre line, as in
-the 3D renderings of the annealed knots of Gallotti & Pierre-Louis (Fig. 7). The tube is a
+the 3D renderings of the annealed knots of Gallotti & Pierre-Louis (Fig. 6). The tube is a
 polygon mesh built from rings of ``n_sides`` vertices, one ring per bead, oriented with a
 parallel-transport (rotation-minimising) frame so that the mesh does not twist; each ring lies in
 the plane bisecting the two bonds at its bead and is stretched there into the mitre ellipse, so

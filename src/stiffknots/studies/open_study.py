@@ -1,4 +1,4 @@
-"""Open knots under tension (§VIII) and the restricted-curvature problem (§IX.D), measured.
+"""Open knots under tension (§VIII) and the restricted-curvature problem (§IX D), measured.
 
 ``python -m stiffknots.studies.open_study --budget small|full --out DIR`` writes
 ``report.md``, ``report.html``, ``summary.json`` and figures:

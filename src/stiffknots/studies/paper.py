@@ -23,7 +23,7 @@ from stiffknots._version import __version__
 from stiffknots.fileio import write_json
 
 PAPER_KNOTS = ("3_1", "4_1", "5_2", "6_2", "6_3")
-# the Monte Carlo shapes of the paper (§VII, Fig. 7)
+# the Monte Carlo shapes of the paper (§VII, Fig. 6)
 PAPER_MC = {"3_1": "CB (i = 2)", "4_1": "4C, ε = 129.6", "5_2": "4C (ground), 80 (metastable)",
             "6_2": "80", "6_3": "80"}
 PAPER_4C = 129.6
@@ -66,8 +66,9 @@ def _anneal_model(name, model, b, seed):
 
     params = MoveParams(exclusion=model)
     starts = split_replicas(available_starts(get_knot(name), starts=STARTS), b["replicas"])
+    # the budget fixes the replicas (shared among the starts): one round, no adaptive rounds
     res = anneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed, params=params,
-                 start=starts)
+                 start=starts, rounds=1)
     if res.interrupted:  # Ctrl-C stopped the replicas: the study stops, not just this knot
         raise KeyboardInterrupt
     d = params.w if model == "tube" else params.d
@@ -230,7 +231,7 @@ def _write_report(out: Path, s: dict) -> None:
                   "under the bead rule with a small distance exists because of that.")
     doc.heading("Against the theory", 2)
     h = s["hierarchy"]
-    doc.paragraph("Hierarchy (e:hierarchy): " + " < ".join(
+    doc.paragraph("Hierarchy (eq. (39)): " + " < ".join(
         f"{lab} {v:.2f}" for lab, v in h["order"]) + f" — holds: {h['holds']}.")
     items = []
     for name, k in s["knots"].items():

@@ -1,15 +1,15 @@
 """Bounds on the equilibrium energy of stiff knots (§IV, §VI, §VIII, §IX).
 
-* Closed knots (e:epsilon_sup_n2), (e:epsilon_ineq_0):
+* Closed knots (eq. (13)), (eq. (31)):
   ``2 pi^2 n^2 <= eps* <= 2 pi^2 min(alpha^2 n^2, i^2)``, ``alpha = (2 eps_loop)^(1/2) / pi``.
-* Open knots (§VIII, e:mu_ineq) with ``n1 = n - 1``, ``i1 = i - 1``:
+* Open knots (§VIII, eq. (45)) with ``n1 = n - 1``, ``i1 = i - 1``:
   ``2 pi^2 n1^2 <= mu* L_e^2 / C <= 2 pi^2 min(alpha^2 n1^2, i1^2)``. The paper prints
   ``alpha n1^2``; the correct form is ``alpha^2 n1^2`` as in the closed case.
 * Restricted curvature (§IX D): ``2 pi n R <= L^dagger <= 2 pi min(7n/3, i) R``, with the PBL
   arc ansatz ``L = 2n [R1 (pi + 2 theta) + 2 R2 theta]``, ``R1 cos theta = R2 (1 - cos theta)``.
 * Thick knots (§IX B): ``eps <= 2 (L/w)^2`` (the paper's "eps = E C / L" means ``E L / C``),
-  and the self-consistency condition (e:self_consistency_E) ``w / L << 1 / (2 pi n)``.
-* Tension of open knots (e:tension_energy), (e:epsilon_e): ``mu = E / L_e = eps_e C / L_e^2``
+  and the self-consistency condition (eq. (16)) ``w / L << 1 / (2 pi n)``.
+* Tension of open knots (eq. (41)), (eq. (42)): ``mu = E / L_e = eps_e C / L_e^2``
   with ``eps_e = E L_e / C`` (the paper's "eps_e = E / L_e" is a misprint).
 
 Unknown knot data (``n`` or ``i`` = ``None``) give ``None`` for the quantities that need them;
@@ -75,7 +75,7 @@ def _cb_or_pbl(cb: float | None, pbl: float | None) -> tuple[float | None, str |
 
 @dataclass(frozen=True)
 class ClosedBounds:
-    """Bounds on ``eps* = E* L / C`` of a closed knot, (e:epsilon_sup_n2) and (e:epsilon_ineq_0).
+    """Bounds on ``eps* = E* L / C`` of a closed knot, (eq. (13)) and (eq. (31)).
 
     Attributes
     ----------
@@ -90,9 +90,9 @@ class ClosedBounds:
         Which configuration gives ``upper``: ``"CB"`` when ``i <= alpha n`` (ties to CB), None
         unless both ``n`` and ``i`` are known.
     eps_cb : float or None
-        Circular braid, ``2 pi^2 i^2`` (e:epsilon*_CB).
+        Circular braid, ``2 pi^2 i^2`` (eq. (30)).
     eps_pbl : float or None
-        Point braid and loops, ``4 n^2 eps_loop = 2 pi^2 alpha^2 n^2`` (e:epsilon*_SBL).
+        Point braid and loops, ``4 n^2 eps_loop = 2 pi^2 alpha^2 n^2`` (eq. (29)).
     exact : bool
         ``n == i``: the bounds coincide, the ground state is the ``i``-covered circle and
         ``eps* = 2 pi^2 i^2`` (§VI C).
@@ -108,7 +108,7 @@ class ClosedBounds:
     exact: bool
 
     def energy_bounds(self, length: float, C: float = 1.0) -> tuple[float | None, float | None]:
-        """Bounds on the energy ``E* = eps* C / L`` (e:epsilon_ineq) for a knot of length ``L``."""
+        """Bounds on the energy ``E* = eps* C / L`` (eq. (32)) for a knot of length ``L``."""
         f = C / length
         return (None if self.lower is None else self.lower * f,
                 None if self.upper is None else self.upper * f)
@@ -117,7 +117,7 @@ class ClosedBounds:
 def closed_bounds(n: int | None, i: int | None) -> ClosedBounds:
     """Bounds on the normalized ground-state energy of a closed stiff knot.
 
-    Implements (e:epsilon_sup_n2) and (e:epsilon_ineq_0) of §IV and §VI:
+    Implements (eq. (13)) and (eq. (31)) of §IV and §VI:
     ``2 pi^2 n^2 <= eps* <= 2 pi^2 min(alpha^2 n^2, i^2)``.
 
     Parameters
@@ -155,7 +155,7 @@ def closed_bounds(n: int | None, i: int | None) -> ClosedBounds:
 
 @dataclass(frozen=True)
 class OpenBounds:
-    """Bounds on ``eps_e* = mu* L_e^2 / C`` of an open knot (§VIII, e:mu_ineq).
+    """Bounds on ``eps_e* = mu* L_e^2 / C`` of an open knot (§VIII, eq. (45)).
 
     Attributes
     ----------
@@ -180,7 +180,7 @@ class OpenBounds:
     exact: bool
 
     def tension_bounds(self, L_e: float, C: float = 1.0) -> tuple[float | None, float | None]:
-        """Bounds on the tension ``mu* = eps_e C / L_e^2`` (e:mu_ineq) at excess length ``L_e``."""
+        """Bounds on the tension ``mu* = eps_e C / L_e^2`` (eq. (45)) at excess length ``L_e``."""
         if L_e <= 0:
             raise ValueError(f"the excess length L_e must be > 0, got {L_e}")
         f = C / (L_e * L_e)
@@ -189,7 +189,7 @@ class OpenBounds:
 
 
 def open_bounds(n: int | None, i: int | None) -> OpenBounds:
-    """Bounds on the tension of an open knot, (e:mu_ineq) of §VIII.
+    """Bounds on the tension of an open knot, (eq. (45)) of §VIII.
 
     Parameters
     ----------
@@ -348,7 +348,7 @@ def thick_knot_bound(L_over_w: float) -> float:
 
 
 def self_consistency_limit(n: int) -> float:
-    """The bound in (e:self_consistency_E): the theory needs ``w / L << 1 / (2 pi n)``.
+    """The bound in (eq. (16)): the theory needs ``w / L << 1 / (2 pi n)``.
 
     Returns ``1 / (2 pi n)``.
     """
@@ -357,16 +357,16 @@ def self_consistency_limit(n: int) -> float:
 
 
 def tension_from_energy(E: float, L_e: float) -> float:
-    """Equilibrium tension ``mu = E / L_e`` (e:tension_energy; ``L`` for closed knots)."""
+    """Equilibrium tension ``mu = E / L_e`` (eq. (41); ``L`` for closed knots)."""
     if L_e <= 0:
         raise ValueError(f"the (excess) length must be > 0, got {L_e}")
     return E / L_e
 
 
 def eps_e(E: float, L_e: float, C: float = 1.0) -> float:
-    """Normalized energy of an open knot ``eps_e = E L_e / C`` (e:epsilon_e, misprint fixed).
+    """Normalized energy of an open knot ``eps_e = E L_e / C`` (eq. (42), misprint fixed).
 
-    The paper prints "eps_e = E / L_e"; with ``E L_e / C``, (e:tension_energy) reads
+    The paper prints "eps_e = E / L_e"; with ``E L_e / C``, (eq. (41)) reads
     ``mu = E / L_e = eps_e C / L_e^2``.
     """
     if L_e <= 0:
@@ -375,7 +375,7 @@ def eps_e(E: float, L_e: float, C: float = 1.0) -> float:
 
 
 def tension_from_eps_e(eps: float, L_e: float, C: float = 1.0) -> float:
-    """Tension ``mu = eps_e C / L_e^2`` (e:tension_energy)."""
+    """Tension ``mu = eps_e C / L_e^2`` (eq. (41))."""
     if L_e <= 0:
         raise ValueError(f"the excess length must be > 0, got {L_e}")
     return eps * C / (L_e * L_e)

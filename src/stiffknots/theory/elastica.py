@@ -4,16 +4,16 @@ The closed and looped planar solutions of the elastica enter the upper bounds of
 (Gallotti & Pierre-Louis, "Stiff knots", PRE 2007):
 
 * the *loop* of the Point-Braid-and-Loops (PBL) configuration: a planar curve that starts and
-  ends at the same point with opposite tangents, ``alpha_loop = A/mu`` from (e:alpha_loop) and
-  its normalized energy ``eps_loop`` from (e:epsilon_loop_calc);
+  ends at the same point with opposite tangents, ``alpha_loop = A/mu`` from (eq. (D5)) and
+  its normalized energy ``eps_loop`` from (eq. (D8));
 * the *8*, the closed periodic figure-eight elastica, with ``alpha_8`` and ``eps_8``
   (Appendix D, "Energy of the 8");
 * the circle, ``eps_0 = 2 pi^2``, and the structures composed of these parts,
-  (e:epsilon*_parts), (e:L_P_parts), (e:epsilon*_CB), (e:epsilon*_SBL) and the "80".
+  (eq. (27)), (eq. (28)), (eq. (30)), (eq. (29)) and the "80".
 
 Conventions
 -----------
-Planar solutions obey (e:2D_elastica), ``(1/2) phi'^2 = (mu + A cos phi) / C`` where ``phi`` is
+Planar solutions obey (eq. (D1)), ``(1/2) phi'^2 = (mu + A cos phi) / C`` where ``phi`` is
 the angle between the tangent and the constant force ``A`` (the paper's ``v = -alpha cos theta``
 is ``v = alpha cos phi`` here, a mere sign convention for the angle). With
 ``alpha = A/mu > 1`` the curve has inflection points (``v = -1``) and is the inflectional
@@ -39,7 +39,7 @@ The constants are computed three independent ways:
     (loop: back on the symmetry axis with the tangent along it; 8: zero drift per period);
     double precision, agrees with the others to about 13 significant digits.
 
-Misprint: in (e:epsilon_loop_calc) the integration variable "dw" means ``dv``.
+Misprint: in (eq. (D8)) the integration variable "dw" means ``dv``.
 
 The paper prints ``alpha_loop ~ 2.158``, ``eps_loop ~ 18.19``, ``alpha_8 ~ 1.53``,
 ``eps_8 ~ 55.93``, ``eps_80 ~ 142.1`` and ``alpha ~ 1.92``. The verified values are
@@ -158,7 +158,7 @@ def _appendix_integrals(alpha: Any, a: Any, b: Any, raw: bool) -> tuple[Any, Any
 
 
 def _loop_integrals(alpha: Any, raw: bool) -> tuple[Any, Any, Any]:
-    """Weighted integrals ``2 int_{-1}^0 + int_0^alpha`` of (e:alpha_loop), (e:epsilon_loop_calc).
+    """Weighted integrals ``2 int_{-1}^0 + int_0^alpha`` of (eq. (D5)), (eq. (D8)).
     """
     lo = _appendix_integrals(alpha, mp.mpf(-1), mp.mpf(0), raw)
     hi = _appendix_integrals(alpha, mp.mpf(0), alpha, raw)
@@ -305,7 +305,7 @@ def _check_method(method: str) -> None:
 def solve_loop(method: str = "integrals", dps: int = 30) -> tuple[Any, Any]:
     """Return ``(alpha_loop, eps_loop)`` of the planar loop of the PBL configuration.
 
-    Implements (e:alpha_loop) and (e:epsilon_loop_calc), Appendix D ("dw" read as ``dv``).
+    Implements (eq. (D5)) and (eq. (D8)), Appendix D ("dw" read as ``dv``).
     The loop starts and ends at the same point with opposite tangents (§VI A).
 
     Parameters
@@ -363,17 +363,17 @@ class ElasticaConstants:
     Attributes
     ----------
     alpha_loop : float
-        ``A/mu`` of the PBL loop, root of (e:alpha_loop).
+        ``A/mu`` of the PBL loop, root of (eq. (D5)).
     eps_loop : float
-        Normalized energy of the loop, (e:epsilon_loop_calc).
+        Normalized energy of the loop, (eq. (D8)).
     alpha_8 : float
         ``A/mu`` of the figure eight (periodicity condition of Appendix D).
     eps_8 : float
         Normalized energy of the figure eight.
     eps_80 : float
-        ``(eps_8^(1/2) + (2 pi^2)^(1/2))^2``, the "80" structure (§VII, from (e:epsilon*_parts)).
+        ``(eps_8^(1/2) + (2 pi^2)^(1/2))^2``, the "80" structure (§VII, from (eq. (27))).
     alpha : float
-        ``(2 eps_loop)^(1/2) / pi``, the CB/PBL crossover of (e:epsilon_ineq_0) (§VI A);
+        ``(2 eps_loop)^(1/2) / pi``, the CB/PBL crossover of (eq. (31)) (§VI A);
         not the same quantity as ``alpha_loop``.
     """
 
@@ -429,14 +429,14 @@ def elastica_constants(method: str = "integrals") -> ElasticaConstants:
 # Structures
 # --------------------------------------------------------------------------------------------
 def eps_cb(i: int) -> float:
-    """Normalized energy of the circular braid of ``i`` strands, ``2 pi^2 i^2`` (e:epsilon*_CB)."""
+    """Normalized energy of the circular braid of ``i`` strands, ``2 pi^2 i^2`` (eq. (30))."""
     if i < 1:
         raise ValueError(f"the braid index i must be >= 1, got {i}")
     return EPS_0 * i * i
 
 
 def eps_pbl(n: int) -> float:
-    """Normalized energy of the PBL configuration, ``4 n^2 eps_loop`` (e:epsilon*_SBL)."""
+    """Normalized energy of the PBL configuration, ``4 n^2 eps_loop`` (eq. (29))."""
     if n < 1:
         raise ValueError(f"the bridge number n must be >= 1, got {n}")
     return 4.0 * n * n * elastica_constants().eps_loop
@@ -454,9 +454,9 @@ class StructureEnergy:
     Attributes
     ----------
     eps : float
-        ``[sum_p m_p eps_p^(1/2)]^2`` (e:epsilon*_parts).
+        ``[sum_p m_p eps_p^(1/2)]^2`` (eq. (27)).
     length_fractions : tuple of float
-        ``L_p / L = (eps_p / eps)^(1/2)`` (e:L_P_parts), one per line-braid (length of the
+        ``L_p / L = (eps_p / eps)^(1/2)`` (eq. (28)), one per line-braid (length of the
         line-braid, not multiplied by its multiplicity; ``sum_p m_p L_p = L``).
     """
 
@@ -468,7 +468,7 @@ def eps_structure(parts: Iterable[tuple[int, float]] | Mapping[Any, tuple[int, f
                   ) -> StructureEnergy:
     """Normalized energy and lengths of a structure of line-braids.
 
-    Implements (e:epsilon*_parts) and (e:L_P_parts) (§V B, Appendix C), valid when all
+    Implements (eq. (27)) and (eq. (28)) (§V B, Appendix C), valid when all
     line-braids are arcs of circles, all are closed loops, or all have the same energy and
     length.
 
@@ -508,7 +508,7 @@ class Hierarchy:
 
 
 def hierarchy(eps_4c: float = 129.6) -> Hierarchy:
-    """The hierarchy (e:hierarchy): CB(i=2) < 4C < 80 < CB(i=3) < PBL(n=2).
+    """The hierarchy (eq. (39)): CB(i=2) < 4C < 80 < CB(i=3) < PBL(n=2).
 
     Parameters
     ----------
@@ -591,7 +591,7 @@ def loop_curve(n_points: int = 400, *, with_tangents: bool = False
     """The planar loop of the PBL configuration (Appendix D, Fig. energy_calc a).
 
     Exact elliptic solution ``x = 2E(am u) - u``, ``y = -2k cn u``, ``u in [-U, U]``, at the
-    modulus fixed by (e:alpha_loop). Points are equally spaced in arc length and the curve is
+    modulus fixed by (eq. (D5)). Points are equally spaced in arc length and the curve is
     normalized to total length 1. It starts and ends at the contact point ``P`` (placed at the
     origin; first and last points coincide) with tangents ``+y`` and ``-y``; its symmetry
     axis is the ``y`` axis.
@@ -681,7 +681,7 @@ def eighty_curve(n_points: int = 600, *, split: bool = False
     """The "80" structure (§VII): a figure-eight and a circle touching tangentially.
 
     The 8 is the exact elastica (:func:`eight_curve`); the circle 0 touches the rightmost point
-    of its upper lobe from outside with the same tangent. Lengths follow (e:L_P_parts),
+    of its upper lobe from outside with the same tangent. Lengths follow (eq. (28)),
     ``L_p / L = (eps_p / eps_80)^(1/2)``, with total length 1. The returned path goes once
     around the 8 from the contact point and then once around the circle, so that it is one
     closed curve with a continuous tangent (the planar shadow of the structure; the paper does

@@ -4,17 +4,17 @@ Gallotti & Pierre-Louis, "Stiff knots", PRE 2007, §V B: when the tube width ``w
 tends to a *structure*, line-braids ``p`` of multiplicity ``m_p`` (``m_p`` strands shrunk onto one
 curve, energy ``m_p C/2 int_p kappa^2 ds``) joined at *point-braids* (a braid shrunk to a point:
 every strand through it is tangent to one common axis, the bunch rotates freely and costs no
-energy) and at plain *multiple points* (strands just cross). Its energy is (e:E_P)
+energy) and at plain *multiple points* (strands just cross). Its energy is (eq. (17))
 
     E_S = sum_p (m_p C / 2) int_p kappa^2 ds,
 
-minimised at fixed total length ``L = sum_p m_p l_p`` through (e:F_P),
+minimised at fixed total length ``L = sum_p m_p l_p`` through (eq. (18)),
 ``F_S = sum_p [m_p C/2 int_p kappa^2 + mu m_p int_p ds]``. At equilibrium each ``A_p`` of
-(e:A_P) is constant, the forces balance at every junction, ``sum_{p->B} A_p = 0`` (e:BC_P_A), and
-the curvature vectors of a bunch balance, ``sum_{p in q_B} m_p kappa_p n_p = 0`` (e:BC_P_Q).
+(eq. (20)) is constant, the forces balance at every junction, ``sum_{p->B} A_p = 0`` (eq. (24)), and
+the curvature vectors of a bunch balance, ``sum_{p in q_B} m_p kappa_p n_p = 0`` (eq. (25)).
 
-This module solves that problem numerically, not through the closed formulas (e:epsilon*_parts)
-and (e:L_P_parts), which hold only for special structures; those formulas (and Appendix D's
+This module solves that problem numerically, not through the closed formulas (eq. (27))
+and (eq. (28)), which hold only for special structures; those formulas (and Appendix D's
 constants) serve as independent checks in the tests.
 
 Discretisation
@@ -44,10 +44,10 @@ coarsest level is minimised by SLSQP (:func:`scipy.optimize.minimize`, analytic 
 from a rough start (not the known solution); every level is then polished by Newton's method
 on the KKT system with the exact sparse Hessian of the Lagrangian (quadratic convergence, a
 tiny proximal shift for exact symmetry modes) and interpolated to the next ``K``. At the
-solution the closure multipliers are minus the constant vectors ``A_p`` of (e:A_P) (the
-Euler-Lagrange equation of the arc is ``t'' = -lam_p + nu t``; so (e:BC_P_A) is the
+solution the closure multipliers are minus the constant vectors ``A_p`` of (eq. (20)) (the
+Euler-Lagrange equation of the arc is ``t'' = -lam_p + nu t``; so (eq. (24)) is the
 stationarity in the junction positions), the length multiplier is the tension ``mu``
-(``mu = E/L``, (e:mu_closed), holds at every ``K`` because the discrete problem is exactly
+(``mu = E/L``, (eq. (26)), holds at every ``K`` because the discrete problem is exactly
 scale covariant, so it checks the convergence of the KKT solve; the continuum check is the
 first integral in :func:`cage_shooting`), and the sign of the reduced Hessian on the
 constraint tangent space tells a minimum from a saddle (at coarse levels a saddle is left
@@ -57,7 +57,7 @@ Structures
 ----------
 ``CB(i)``
     :func:`circular_braid`: one closed line-braid of multiplicity ``i``; the minimiser is the
-    circle, ``eps_CB = 2 pi^2 i^2`` (e:epsilon*_CB).
+    circle, ``eps_CB = 2 pi^2 i^2`` (eq. (30)).
 ``80``
     :func:`eighty`: the figure-eight (a closed strand with one double point ``X``) and a circle
     joined tangentially at a point-braid ``P`` on one lobe of the 8 (§VII). Expected
@@ -65,7 +65,7 @@ Structures
 ``PBL(n)``
     :func:`point_braid_loops`: ``2n`` loops at one point-braid, each leaving along ``+-a`` and
     returning along ``-+a`` (§VI A, Fig. 2e), a check of clamped ends:
-    ``eps_PBL = 4 n^2 eps_loop`` (e:epsilon*_SBL).
+    ``eps_PBL = 4 n^2 eps_loop`` (eq. (29)).
 ``4C``
     :func:`four_fold_cage`: two point-braids ``A`` and ``B`` with axes ``a`` and ``b`` joined by
     four arcs of multiplicity 1, one for each pair of sides ``(+-a at A, +-b at B)``: each arc
@@ -92,9 +92,9 @@ Results (:func:`structure_energy`, ``K`` up to 256 per unit weight, 512 for the 
 * ``4C``: ``eps*_4C = 126.4724695555 +- 2e-10`` (the shooting of one arc,
   :func:`cage_shooting`, agrees to ``1e-11``), inside the paper's ``(8 pi^2, 129.6)`` and below
   this package's finite-width Monte Carlo (128.4 beads, 126.7 thin tube), so the hierarchy
-  (e:hierarchy) CB(2) < 4C < 80 < CB(3) < PBL(2) holds. The minimiser has perpendicular axes,
+  (eq. (39)) CB(2) < 4C < 80 < CB(3) < PBL(2) holds. The minimiser has perpendicular axes,
   both perpendicular to ``AB``; ``|AB| = 0.15802 L``; four congruent arcs of length ``L/4``
-  (so (e:epsilon*_parts) case (iii) applies: ``eps_4C = 16 eps_arc``, ``eps_arc = 7.90449``),
+  (so (eq. (27)) case (iii) applies: ``eps_4C = 16 eps_arc``, ``eps_arc = 7.90449``),
   close to a sphere of radius ``0.0754 L`` (rms deviation 3 %); each arc stays in its own
   quarter wedge around ``AB`` and arcs meet only at ``A`` and ``B`` (two arcs leaving the same
   side separate as ``14.7 s^2 / L``). The reduced Hessian is positive definite (no zero mode
@@ -672,11 +672,11 @@ class LevelSolution:
 
     @property
     def tension(self) -> float:
-        """``mu``: the multiplier of ``sum m_p l_p = L`` (equals ``E/L``, (e:mu_closed))."""
+        """``mu``: the multiplier of ``sum m_p l_p = L`` (equals ``E/L``, (eq. (26)))."""
         return float(self.lam[self.problem.length_row])
 
     def force(self, p: int) -> np.ndarray:
-        """Closure multiplier of arc ``p``: ``-A_p``, the constant vector of (e:A_P) (C = 1)."""
+        """Closure multiplier of arc ``p``: ``-A_p``, the constant vector of (eq. (20)) (C = 1)."""
         r = self.problem.closure_row0 + 3 * p
         return self.lam[r:r + 3].copy()
 
@@ -706,7 +706,7 @@ class StructureResult:
 def solve_structure(structure: Structure, Ks: Sequence[int] = (16, 32, 64, 128, 256),
                     *, coarse_K: int | None = None, orders: int = 3,
                     stability_K: int | None = None) -> StructureResult:
-    """Minimise a structure's energy (e:E_P) at fixed length and extrapolate ``K -> inf``.
+    """Minimise a structure's energy (eq. (17)) at fixed length and extrapolate ``K -> inf``.
 
     Parameters
     ----------
@@ -870,7 +870,7 @@ def _curvature_vectors(T: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]
 # The structures
 # --------------------------------------------------------------------------------------------
 def circular_braid(i: int) -> Structure:
-    """``CB(i)``: one closed line-braid of multiplicity ``i`` (§VI A, (e:epsilon*_CB)).
+    """``CB(i)``: one closed line-braid of multiplicity ``i`` (§VI A, (eq. (30))).
 
     The start is a non-planar wobbly closed curve through a junction ``P`` (held at the origin
     with its tangent fixed along ``x``: the translation and rotation gauge); the minimiser is
@@ -962,7 +962,7 @@ def point_braid_loops(n: int) -> Structure:
 
     Each loop leaves the point-braid ``P`` along one side of its axis and returns along the
     opposite tangent (``n`` loops on each side, so that every strand goes straight through
-    ``P``); expected ``eps = 4 n^2 eps_loop`` (e:epsilon*_SBL). A test of clamped ends: the
+    ``P``); expected ``eps = 4 n^2 eps_loop`` (eq. (29)). A test of clamped ends: the
     loops meet ``P`` with curvature, like the arcs of the cage.
     """
     if not isinstance(n, int | np.integer) or n < 1:
@@ -1068,7 +1068,7 @@ def four_fold_cage(axis_angle: float | None = None, *, radius: float = 1.0,
 # Diagnostics
 # --------------------------------------------------------------------------------------------
 def _bunch_balance(lv: LevelSolution) -> dict[str, float]:
-    """Residual of (e:BC_P_Q) and (e:BC_P_A) at every point-braid, relative to their terms.
+    """Residual of (eq. (25)) and (eq. (24)) at every point-braid, relative to their terms.
 
     Bunch torque: a strand end with outward tangent ``sigma a`` contributes ``sigma m kappa n``;
     force: closure multipliers ``A_p`` summed with ``+`` at the end, ``-`` at the start.
@@ -1220,15 +1220,15 @@ def cage_shooting(level: LevelSolution | None = None) -> dict[str, Any]:
     through ``AB``, so the structure reduces to one arc of length ``L/4`` with
     ``eps_4C = 4 E_arc L / C``. In the frame ``A = 0``, ``a = x``, ``B = (0, 0, -d)``, ``b = y``,
     the arc leaving ``A`` along ``+x`` and entering ``B`` along ``-y`` solves the twist-free
-    3D elastica with a constant force ``N`` (``-A_p`` of (e:A_P)),
+    3D elastica with a constant force ``N`` (``-A_p`` of (eq. (20))),
 
         t'' = -N + (N.t - kappa^2) t,    r' = t,
 
     from ``r(0) = 0``, ``t(0) = x``, ``t'(0) = (0, k_y, k_z)``. The four unknowns
     ``(k_y, k_z, N_x, N_y)`` (``N = -A_p``) are fixed by ``r_x(l) = r_y(l) = 0`` and
     ``t(l) = -y``;
-    ``N_z = 0`` is (e:BC_P_A) at ``A`` (the four images of ``N`` sum to ``(0, 0, 4 N_z)``),
-    which is also the stationarity in ``d``; (e:BC_P_Q) holds by the mirror symmetry.
+    ``N_z = 0`` is (eq. (24)) at ``A`` (the four images of ``N`` sum to ``(0, 0, 4 N_z)``),
+    which is also the stationarity in ``d``; (eq. (25)) holds by the mirror symmetry.
     Integration by DOP853 (rtol 1e-13), root by :func:`scipy.optimize.fsolve`.
 
     Parameters
@@ -1293,7 +1293,7 @@ def cage_shooting(level: LevelSolution | None = None) -> dict[str, Any]:
     ss = np.linspace(0.0, ell, 201)
     Y = sol.sol(ss)
     k2 = np.sum(Y[6:9] ** 2, axis=0)
-    mu_s = 0.5 * k2 + N @ Y[3:6]  # (e:var_E_1_P) with A_p = -N
+    mu_s = 0.5 * k2 + N @ Y[3:6]  # (eq. (21)) with A_p = -N
     E_arc = float(sol.y[9, -1])
     eps = 4.0 * E_arc  # four congruent arcs, L = 4 l = 1
     return {
@@ -1422,7 +1422,7 @@ def structure_energy(name: str) -> dict[str, Any]:
         ``epsilon`` (extrapolated), ``error`` (extrapolation + optimiser estimate), ``method``,
         ``structure`` (short description), ``K`` (base resolutions), ``details`` (Richardson
         table, per-arc lengths/energies/forces, tension check ``mu = E/L``, balance residuals
-        of (e:BC_P_A) and (e:BC_P_Q), reduced-Hessian spectrum, and per structure: cage
+        of (eq. (24)) and (eq. (25)), reduced-Hessian spectrum, and per structure: cage
         geometry and arc distances; the 80's length fractions and contact force). Cached;
         seconds for CB, PBL and 80, about a minute for 4C on one core.
 

@@ -1,0 +1,235 @@
+"""``stiffknots atlas``: sweep every prime knot through K crossings on Dask, store the results,
+write the atlas pages (:mod:`stiffknots.studies.atlas`)."""
+
+from __future__ import annotations
+
+import shlex
+import sys
+import threading
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+
+from stiffknots.cli.app import (
+    Interrupted,
+    JsonOpt,
+    SeedOpt,
+    UserError,
+    dump,
+    err,
+    out,
+    prepare_file,
+    prepare_folder,
+)
+from stiffknots.sweeps import SweepListener
+
+
+class SweepProgress(SweepListener):
+    """A live bar over the sweep's jobs on stderr: jobs done (a running job counts by its
+    moves done), time left, the last job finished. Nothing is shown with ``--json``."""
+
+    def __init__(self, disable: bool = False):
+        self.progress = Progress(
+            TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("jobs"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+            TextColumn("{task.fields[last]}"), console=err, transient=True, disable=disable)
+        self.task = None
+        self.total = 0
+        self.done = 0
+        self.running: dict[str, float] = {}
+        self.lock = threading.Lock()
+        self.disable = disable
+
+    def __enter__(self):
+        self.progress.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        return self.progress.__exit__(*exc)
+
+    def started(self, result) -> None:
+        if not self.disable and result.skipped:
+            err.print(f"{result.skipped} of {result.jobs} jobs already stored: skipped",
+                      highlight=False)
+        self.total = result.todo
+        self.task = self.progress.add_task("sweep", total=result.todo, last="")
+
+    def cluster(self, description: str, threads: int) -> None:
+        if self.task is not None:
+            self.progress.update(self.task, description=f"sweep ({threads} workers)")
+
+    def _update(self, last: str | None = None) -> None:
+        if self.task is None:
+            return
+        kw = {"completed": min(self.done + sum(self.running.values()), self.total)}
+        if last is not None:
+            kw["last"] = last
+        self.progress.update(self.task, **kw)
+
+    def progress(self, job: str, done: int, total: int, best=None, pid=None) -> None:
+        with self.lock:
+            if total:
+                self.running[job] = min(done / total, 0.999)
+            self._update()
+
+    def added(self, jobs: int) -> None:
+        with self.lock:
+            self.total += jobs
+            if self.task is not None:
+                self.progress.update(self.task, total=self.total)
+
+    def finished(self, job, row, error) -> None:
+        with self.lock:
+            self.running.pop(job.id, None)
+            self.done += 1
+            if row is not None:
+                shape = f"CB(i={row['multiplicity']})" if row["shape"] == "CB" else row["shape"]
+                last = f"{job.id}: ε = {row['epsilon']:.2f} {shape}"
+            else:
+                last = f"{job.id}: failed"
+            self._update(escape(last))
+
+
+def _knot_list(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    if not names:
+        raise UserError("--knots must be knot names separated by commas, e.g. 3_1,4_1,5_2")
+    return names
+
+
+def atlas(
+    max_crossings: Annotated[int | None, typer.Option(
+        help="Every prime knot with 3 ≤ n_c ≤ K (3..13); with --knots, a limit on them.")
+    ] = None,
+    knots: Annotated[str | None, typer.Option(
+        help="Only these knots, separated by commas (3_1,4_1,5_2).")] = None,
+    models: Annotated[str, typer.Option(
+        help="Exclusion models, separated by commas: bead (the paper's rule d = 1/√2) and/or "
+             "tube (diameter --w).")] = "bead,tube",
+    budget: Annotated[str, typer.Option(
+        help="Replicas × moves per knot and model: tiny (2 × 0.2 M, a smoke test), small "
+             "(2 × 5 M), default (4 × 30 M) or full (8 × 100 M).")] = "default",
+    out_dir: Annotated[str, typer.Option(
+        "--out", help="Folder of the atlas pages.")] = "results/atlas",
+    db: Annotated[str, typer.Option(
+        help="Results database: stored replicas are reused (resume), new ones added.")
+    ] = "results/stiffknots.db",
+    scheduler: Annotated[str | None, typer.Option(
+        help="Address of a running Dask scheduler (tcp://host:8786); default: a local "
+             "cluster of one worker process per core.")] = None,
+    workers: Annotated[int | None, typer.Option(
+        help="Worker processes of the local cluster (default: one per core).")] = None,
+    w: Annotated[float | None, typer.Option(
+        help="Tube diameter of the tube model (bond units; default 1/√2).")] = None,
+    replicas: Annotated[int | None, typer.Option(
+        help="Replicas per knot and model instead of the budget's.")] = None,
+    moves: Annotated[int | None, typer.Option(
+        help="Attempted moves per replica instead of the budget's.")] = None,
+    max_replicas: Annotated[int | None, typer.Option(
+        help="Add replicas, 2 at a time, to every knot and model whose ground state has not "
+             "converged, up to this many in all (default: the budget's; none added).")
+    ] = None,
+    seed: SeedOpt = 0,
+    json_: JsonOpt = False,
+) -> None:
+    """The atlas: ground and metastable states of every prime knot through K crossings
+    (§VII), bead rule and tube, swept on Dask into the results database, tested against the
+    paper's families (§VI C, §VII), written as static pages (index.html)."""
+    from stiffknots.problems import validate as V
+    from stiffknots.studies.atlas import run_atlas
+    from stiffknots.sweeps import budget_of, parse_models, resolve_knots
+    from stiffknots.sweeps.cluster import local_workers, scheduler_address
+
+    if max_crossings is None and knots is None:
+        raise UserError("give --max-crossings K (every prime knot through K crossings) or "
+                        "--knots 3_1,4_1,...")
+    # every input is checked before any work
+    names = resolve_knots(_knot_list(knots), max_crossings)
+    mods = parse_models(models, w=w)
+    if w is not None and "tube" not in [m.name for m in mods]:
+        raise UserError("--w is the tube diameter: add tube to --models")
+    bud = budget_of(budget, replicas=replicas, moves=moves)
+    V.seed(seed)
+    if max_replicas is not None:
+        V.integer("max_replicas", max_replicas, bud.replicas, V.MAX_REPLICAS)
+    if scheduler is None:
+        local_workers(workers)
+    else:
+        scheduler = scheduler_address(scheduler)
+        if workers is not None:
+            raise UserError("--workers is for the local cluster; a --scheduler has its own")
+    db = prepare_file(db, "--db")
+    out_dir = prepare_folder(out_dir, "--out")
+    command = "stiffknots " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    with SweepProgress(disable=json_) as bar:
+        d = run_atlas(names, mods, bud, db=db, out=out_dir, seed=seed, scheduler=scheduler,
+                      workers=workers, max_replicas=max_replicas, listener=bar,
+                      command=command)
+    sw = d["sweep"]
+    stored = sw["skipped"] + sw["ran"]
+    if sw["interrupted"]:
+        if json_:
+            dump(d)
+        raise Interrupted(f"interrupted: {stored} of {sw['jobs']} jobs are stored in {db}; "
+                          "run the same command to resume")
+    if json_:
+        dump(d)
+    else:
+        _print(d, mods)
+    if sw["failed"]:
+        for f in sw["failed"]:
+            err.print(f"failed: {f['job']}: {f['error']}", highlight=False, markup=False,
+                      soft_wrap=True)
+        err.print(f"{len(sw['failed'])} of {sw['jobs']} jobs failed (not stored); the atlas "
+                  "shows the others", highlight=False)
+        raise typer.Exit(1)
+
+
+def _print(d: dict, mods) -> None:
+    sw = d["sweep"]
+    t = Table(title=f"{len(d['knots'])} knots — {', '.join(m.width()['text'] for m in mods)}")
+    for col in ("knot", "n_c", "n", "i", "families"):
+        t.add_column(col, justify="right" if col in ("n_c", "n", "i") else "left")
+    for m in mods:
+        t.add_column(f"{m.name} ground", justify="right")
+        t.add_column("conv.", justify="center")
+        t.add_column("meta.", justify="right")
+    for e in d["knots"]:
+        cells = [e["name"], str(e["crossing_number"]), str(e["n"]), str(e["i"]),
+                 ",".join(e["families"]) or "—"]
+        for m in mods:
+            me = e["models"][m.name]
+            g = me["ground"]
+            cells += [f"{g['name']} {g['epsilon']:.2f}" if g else "—",
+                      "✓" if me["converged"] else "·", str(len(me["metastable"]))]
+        t.add_row(*[escape(c) for c in cells])
+    out.print(t)
+    fam = d["families"]
+    for r in fam["catalogue"]:
+        paper = f" (paper: {100 * r['paper']:.0f} %)" if r.get("paper") is not None else ""
+        out.print(f"families cover {r['covered']} of {r['knots']} knots with {r['label']} "
+                  f"({100 * (r['fraction'] or 0):.0f} %){paper}", highlight=False)
+    for g in fam["groups"]:
+        out.print(f"{g['label']}: {g['knots']} ground states ({fam['model']}, "
+                  f"{fam['width']}): " + ", ".join(f"{k} {v}" for k, v in g["counts"].items())
+                  + f"; as the family predicts {g['as_predicted']}, converged "
+                  f"{g['converged']}", highlight=False, markup=False)
+    conv = ", ".join(f"{k} {100 * v:.0f} %" for k, v in d["converged"].items() if v is not None)
+    out.print(f"converged ({fam['rule']}): {conv}", highlight=False, markup=False)
+    added = f", {sw['added']} added until converged" if sw["added"] else ""
+    out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}, "
+              f"{sw['wall_seconds']:.0f} s wall, {sw['cpu_seconds']:.0f} CPU s)",
+              highlight=False)
+    out.print(f"atlas: {d['html']}\ndatabase: {d['db']}", highlight=False, markup=False)

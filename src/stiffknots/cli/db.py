@@ -1,0 +1,131 @@
+"""``stiffknots db``: questions to the results database (:mod:`stiffknots.store.queries`).
+
+``stiffknots db [--db PATH] states K [--model bead] [--json]`` — a knot's ground and
+metastable states, per ensemble (model, width, N, settings);
+``stiffknots db [--db PATH] grounds [--csv FILE] [--json]`` — every ground state, one row per
+knot × model × N × width.
+
+A state is converged by the sweeps' rule (:func:`stiffknots.sweeps.is_converged`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from stiffknots.cli.app import JsonOpt, UserError, dump, out
+
+db_app = typer.Typer(
+    no_args_is_help=True, add_completion=False,
+    help="Query the results database: a knot's states, every ground state.")
+
+
+def _width(exclusion: str, thickness: float, beads: int, key: str = "text") -> str:
+    from stiffknots.sweeps import Model
+
+    return Model(exclusion, float(thickness), int(beads)).width()[key]
+
+
+def _open(ctx: typer.Context):
+    from stiffknots.store import Store
+
+    return Store(ctx.obj["db"], create=False)
+
+
+@db_app.callback()
+def db_main(ctx: typer.Context,
+            db: Annotated[Path, typer.Option(help="The results database.")
+                          ] = Path("results/stiffknots.db")) -> None:
+    """Query the results database (default results/stiffknots.db, where `stiffknots atlas`
+    writes)."""
+    ctx.obj = {"db": db}
+
+
+@db_app.command("states")
+def states(
+    ctx: typer.Context,
+    knot: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
+    model: Annotated[str | None, typer.Option(
+        help="Only this exclusion model: bead or tube (default: every model stored).")
+    ] = None,
+    json_: JsonOpt = False,
+) -> None:
+    """A knot's ground and metastable states, per model, width, N and settings."""
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.store import describe_knot
+    from stiffknots.sweeps import CONVERGENCE_RULE, MODELS, is_converged
+
+    if model is not None and model not in MODELS:
+        raise UserError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
+    name = get_knot(knot).name
+    with _open(ctx) as store:
+        d = describe_knot(store, name, exclusion=model)
+    for e in d["ensembles"]:
+        e["width"] = _width(e["exclusion"], e["thickness"], e["beads"])
+        e["converged"] = is_converged(e["ground"])
+    d["converged_rule"] = CONVERGENCE_RULE
+    if json_:
+        dump(d)
+        return
+    for e in d["ensembles"]:
+        s = e["settings"]
+        t = Table(title=escape(f"{name} — {e['width']}, {s.get('moves', 0):,} moves/replica, "
+                               f"settings {e['settings_hash']}, {e['replicas']} replicas"))
+        for col in ("state", "role", "ε min", "ε mean", "replicas", "starts", "min seg dist"):
+            t.add_column(col, justify="left" if col in ("state", "role", "starts") else "right")
+        for k, st in enumerate([e["ground"], *e["metastable"]]):
+            role = ("ground" + (" (converged)" if e["converged"] else "")) if k == 0 \
+                else "metastable"
+            t.add_row(escape(st["name"]), role, f"{st['epsilon']:.3f}", f"{st['eps_mean']:.3f}",
+                      str(st["count"]), escape(", ".join(f"{a} {b}" for a, b in
+                                                         st["starts"].items())),
+                      f"{st['min_segment_distance']:.3f}")
+        out.print(t)
+    out.print(f"converged: {CONVERGENCE_RULE}", highlight=False, markup=False)
+
+
+@db_app.command("grounds")
+def grounds(
+    ctx: typer.Context,
+    csv: Annotated[Path | None, typer.Option(help="Also write the table to this CSV file.")
+                   ] = None,
+    json_: JsonOpt = False,
+) -> None:
+    """Every ground state: one row per knot × model × N × width (the lowest-ε settings)."""
+    from stiffknots.store import ground_table, to_csv
+    from stiffknots.sweeps import CONVERGENCE_RULE, is_converged
+
+    if csv is not None and csv.is_dir():
+        raise UserError(f"--csv {csv} is a folder; give the path of a file")
+    with _open(ctx) as store:
+        rows = ground_table(store)
+    for r in rows:
+        r["width"] = _width(r["exclusion"], r["thickness"], r["beads"])
+        r["converged_rule"] = is_converged({"count": r["count"], "epsilon": r["epsilon"]})
+    path = None
+    if csv is not None:
+        try:
+            path = to_csv(csv, rows)
+        except OSError as e:
+            raise UserError(f"--csv {csv}: cannot write it ({e.strerror or e})") from None
+    if json_:
+        dump({"db": str(ctx.obj["db"]), "csv": None if path is None else str(path),
+              "converged_rule": CONVERGENCE_RULE, "grounds": rows})
+        return
+    t = Table(title=f"ground states in {ctx.obj['db']}")
+    for col in ("knot", "width", "state", "ε", "replicas", "converged", "metastable"):
+        t.add_column(col, justify="right" if col in ("ε", "replicas") else "left")
+    for r in rows:
+        t.add_row(escape(r["knot"]),
+                  escape(_width(r["exclusion"], r["thickness"], r["beads"], "short")),
+                  escape(r["state"]),
+                  f"{r['epsilon']:.3f}", f"{r['count']}/{r['replicas']}",
+                  "yes" if r["converged_rule"] else "no", escape(r["metastable"] or "—"))
+    out.print(t)
+    out.print(f"converged: {CONVERGENCE_RULE}", highlight=False, markup=False)
+    if path is not None:
+        out.print(f"CSV: {path}", highlight=False, markup=False)

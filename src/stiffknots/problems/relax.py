@@ -1,0 +1,214 @@
+"""Relax a curve brought by the user (an experiment, ElasticKnots, KnotPlot, a polymer
+simulation) to the nearest stiff-knot equilibrium (§II, §VII).
+
+The curve — a closed polygon of any bond lengths — is
+
+1. named (:func:`~stiffknots.knots.identify.identify_name`: one catalogue name where an
+   invariant can tell), and its normalised energy ε = E·L/C taken as given (``input_epsilon``:
+   E = C Σ_i (1 − u_i·u_{i+1})/b̄_i with b̄_i the mean length of the two bonds at vertex i, so
+   ε = E_d·N for unit bonds, :meth:`stiffknots.chain.Chain.epsilon`);
+2. resampled to N unit bonds (:func:`~stiffknots.knots.resample.resample`: equal chords on the
+   polygon, the isotopy certified and the HOMFLY-PT polynomial checked identical), which fixes
+   the scale: L = N bonds;
+3. given the thickness of the model — the paper's bead rule d = 1/√2 bond, or a tube of
+   diameter w = (w/L)·N — which the resampled chain must already satisfy (a curve thinner
+   than the model cannot be inflated without changing it: the error says the curve's own
+   thickness and what would fit);
+4. relaxed: a low-temperature Monte Carlo from the curve itself (the relaxation stage of the
+   annealing, geometric cooling to T → 0, then a quench; :mod:`stiffknots.engine.schedules`),
+   which keeps its shape class, and verified like every run (energy recomputed, bonds,
+   exclusion, the start's polynomial).
+
+``stiffknots anneal --from FILE`` (a full annealing from the curve) is
+:class:`~stiffknots.problems.closed.ClosedAnneal` with ``initial=``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from stiffknots.chain import Chain
+from stiffknots.engine.driver import AnnealSettings
+from stiffknots.engine.params import MoveParams
+from stiffknots.engine.schedules import Schedule
+from stiffknots.errors import InvalidParameter, UserInputError
+from stiffknots.problems import validate as V
+from stiffknots.problems.base import (
+    Job,
+    Problem,
+    Replica,
+    ReplicaSet,
+    default_moves,
+    observe_shape,
+    solve,
+)
+
+D_BEAD = 1 / math.sqrt(2)
+
+
+@dataclass
+class RelaxResult(ReplicaSet):
+    """The relaxed curve: replicas best (lowest ε) first, with the input's own ε."""
+
+    problem: ClassVar[str] = "relax"
+    input_epsilon: float | None = None
+    naming: dict | None = None
+
+    @property
+    def epsilon(self) -> float:
+        return self.best.epsilon
+
+    def physics(self) -> dict:
+        ok = bool(self.replicas)
+        obs = self.best.observables if ok else {}
+        return {"input_epsilon": self.input_epsilon,
+                "epsilon": self.best.epsilon if ok else None,
+                "shape": obs.get("label"), "multiplicity": obs.get("multiplicity"),
+                "naming": self.naming}
+
+
+def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | None,
+                  knot: str | None) -> tuple[Chain, str, dict, MoveParams]:
+    """Name, resample and check a user's closed curve (module docstring, steps 1–3).
+
+    Returns the resampled chain, the knot's name, the naming evidence and the move parameters
+    of the model. Raises UserInputError (one line) when the curve cannot be used as asked.
+    """
+    from stiffknots.knots.identify import identify_details, normalize_name
+    from stiffknots.knots.resample import resample
+
+    if not chain.closed:
+        raise UserInputError("relax takes a closed curve (a knot); for an open knot under "
+                             "tension use `stiffknots open`")
+    V.beads(beads)
+    V.choice("exclusion", exclusion, ("bead", "tube"))
+    naming = identify_details(chain.coords, closed=True).as_dict()
+    name = naming.get("knot")
+    if knot is not None:
+        want = normalize_name(knot)
+        cands = [naming.get("knot")] + list(naming.get("candidates") or [])
+        if naming.get("knot") != "unknown" and want not in [c for c in cands if c]:
+            raise UserInputError(f"the curve is {naming.get('knot') or cands}, not {knot}")
+        name = want
+    if name is None:
+        raise UserInputError("the curve's knot type is ambiguous ("
+                             + " or ".join(naming.get("candidates") or ["unknown"])
+                             + "); give it with --knot")
+    x = resample(chain, beads)
+    if exclusion == "tube":
+        if w_over_L is None:
+            raise InvalidParameter("w_over_L", None, "given for the tube model")
+        V.number("w_over_L", w_over_L, 0, 1 / 8, lo_open=True)
+        w = w_over_L * beads
+        if w >= 1:
+            raise InvalidParameter("w_over_L", w_over_L, f"below 1/N = {1 / beads:.3g}",
+                                   f"the tube must be thinner than a bond at N = {beads}")
+        params = MoveParams(exclusion="tube", w=w)
+        have, need = x.min_segment_distance(), w
+    else:
+        params = MoveParams(exclusion="bead", d=D_BEAD)
+        have, need = x.min_bead_distance(), D_BEAD
+    if have < need:
+        fix = (f"use --beads ≥ {math.ceil(beads * need / have)}" if exclusion == "bead"
+               else f"use --w-over-L ≤ {have / beads:.3g} (the curve's own thickness)")
+        raise UserInputError(f"the curve resampled to {beads} beads is thinner than the model "
+                             f"({have:.3g} < {need:.3g} bond lengths between non-adjacent "
+                             f"{'beads' if exclusion == 'bead' else 'segments'}); {fix}")
+    return x, name, naming, params.for_beads(beads)
+
+
+class Relax(Problem):
+    """Relax a user's curve; see :func:`relax`."""
+
+    result_type = RelaxResult
+
+    def __init__(self, chain: Chain, beads: int = 150, moves: int | None = None,
+                 replicas: int = 2, seed: int = 0, *, exclusion: str = "bead",
+                 w_over_L: float | None = None, knot: str | None = None,
+                 polish: bool = True):
+        from stiffknots.problems.base import start_code
+
+        self.replicas = V.replicas(replicas)
+        self.seed = V.seed(seed)
+        self.beads = V.beads(beads)
+        self.polish = bool(polish)
+        x, self.knot_name, self.naming, params = prepare_curve(chain, beads, exclusion,
+                                                                w_over_L, knot)
+        self.input_epsilon = chain.epsilon()
+        self.coords = x.coords
+        sch = Schedule().for_beads(beads)
+        # the relaxation stage of the annealing only: low temperature, then a quench
+        relax = Schedule(kind="geometric", t_start=sch.t_relax, t_end=sch.t_relax_end,
+                         relax_fraction=0.0)
+        self.settings = AnnealSettings(
+            moves=V.moves(round(0.4 * default_moves(beads)) if moves is None else moves),
+            schedule=relax, params=params)
+        self.settings.validate()
+        self.code = start_code(self.knot_name, self.coords, True, "input")
+        self._bounds = _bounds(self.knot_name)
+
+    def jobs(self, first: int = 0) -> list[Job]:
+        return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "input",
+                                  lambda r: self.code, first=first)
+
+    def state_of(self, r: Replica) -> tuple[str, float]:
+        return r.observables["shape"], r.epsilon
+
+    def observe(self, r: Replica) -> None:
+        observe_shape(r, self.settings.params)
+
+    def bounds(self) -> dict:
+        return self._bounds
+
+    def settings_dict(self) -> dict:
+        return {**self.settings.as_dict(), "start": "input", "polish": self.polish}
+
+    def result_fields(self, replicas):
+        return {"input_epsilon": self.input_epsilon, "naming": self.naming}
+
+
+def _bounds(name: str) -> dict:
+    """Closed bounds of a catalogue knot (empty for a name outside the catalogue)."""
+    from stiffknots.errors import UnknownKnotError
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.theory.bounds import closed_bounds
+
+    try:
+        k = get_knot(name)
+    except UnknownKnotError:
+        return {}
+    b = closed_bounds(k.bridge_number, k.braid_index)
+    return {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
+
+
+def relax(chain: Chain | np.ndarray, beads: int = 150, moves: int | None = None,
+          replicas: int = 2, seed: int = 0, *, exclusion: str = "bead",
+          w_over_L: float | None = None, knot: str | None = None,
+          workers: int | None = None, on_progress=None, polish: bool = True
+          ) -> RelaxResult:
+    """Relax a closed curve of any bond lengths to the nearest stiff-knot equilibrium.
+
+    Parameters
+    ----------
+    chain : a closed :class:`~stiffknots.chain.Chain` (or its (M, 3) coordinates).
+    beads : N of the resampled chain (bond length 1, L = N).
+    moves : Monte Carlo moves per replica (default 40 % of :func:`default_moves`, the
+        relaxation stage of an annealing).
+    exclusion, w_over_L : the paper's bead rule (``"bead"``, d = 1/√2 bond) or a tube of
+        diameter w = w_over_L · N (``"tube"``).
+    knot : the knot's name, if the invariants cannot tell (a HOMFLY-PT tie) or to check it.
+
+    Returns
+    -------
+    RelaxResult — ``input_epsilon`` (the curve as given), ``epsilon`` and ``shape`` of the
+    relaxed chain, ``converged`` (the replicas agree), and the naming evidence.
+    """
+    if not isinstance(chain, Chain):
+        chain = Chain(chain, closed=True)
+    problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
+                    w_over_L=w_over_L, knot=knot, polish=polish)
+    return solve(problem, workers=workers, on_progress=on_progress)

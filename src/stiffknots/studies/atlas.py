@@ -1,0 +1,378 @@
+"""The atlas study: every prime knot through K crossings, swept, stored, tested against the
+paper's families, and written as static pages.
+
+:func:`run_atlas` runs a sweep (:func:`stiffknots.sweeps.run_sweep`: knots × models ×
+replicas on Dask, resumable through the results store), then reads back from the store, for
+every knot and model, the ground state and the metastable states of the sweep's ensemble
+(:meth:`Store.states <stiffknots.store.sqlite.Store.states>`: one exclusion model, width, N
+and settings), the chain of each state's representative replica (for the 3D views), and
+writes the atlas pages (:func:`stiffknots.report.atlas.write_atlas`), ``eps_vs_n2.png`` and
+``families.json``.
+
+Every ε is a Monte Carlo value at the model's finite width (the bead rule d = 1/√2 or the
+tube w, at N = 150: w/L ≈ 0.0047), stated with it; the thin-limit ε* lies below (§V A).
+
+The families (paper §VI C and §VII, Fig. 8; :mod:`stiffknots.knots.families`)
+------------------------------------------------------------------------------
+:func:`family_study` sets the ground states found against the three conjectured families —
+n = i → CB(i) (proven), the two-box rational knots [ab] → 4-fold cage, the 80 family → 80:
+
+* from the catalogue alone, which knots each family holds and the fraction of the knots with
+  n_c < 7 and n_c < 9 they cover (the paper: all, and 75 %);
+* from the stored results, how many ground states are CB(i), 4C, 80 or other, how many are
+  the shape their family predicts (:func:`stiffknots.knots.families.predicted_shape`), the
+  knots whose ground state contradicts it, and the knots in no family with their shapes;
+* ε against n² for n = 2, 3, 4 (:func:`stiffknots.report.figures.plot_eps_vs_n2`).
+
+Convergence of a ground state follows :func:`stiffknots.sweeps.is_converged`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from stiffknots._version import __version__
+from stiffknots.fileio import write_json
+from stiffknots.store import Store
+from stiffknots.sweeps import (
+    CONVERGENCE_RULE,
+    Budget,
+    Model,
+    SweepListener,
+    SweepResult,
+    is_converged,
+    run_sweep,
+    sweep_settings,
+)
+
+__all__ = ["DEFAULT_OUT", "DEFAULT_DB", "knot_records", "atlas_input", "json_entry",
+           "family_study", "families_table", "eps_n2_points", "run_atlas"]
+
+#: Where the pages go by default.
+DEFAULT_OUT = Path("results") / "atlas"
+#: The results database by default: the store's own default (one database for every sweep
+#: and for ``stiffknots db``; the ensembles of different budgets or widths never mix).
+DEFAULT_DB = Path("results") / "stiffknots.db"
+
+_N_VALUES = (2, 3, 4)  # the bridge numbers of the ε–n² figure
+
+
+def _states(store: Store, knot: str, model: Model, settings_hash: str) -> dict | None:
+    """The states of one knot's ensemble under ``model`` and the sweep's settings; None if
+    nothing is stored."""
+    if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
+                       thickness=model.thickness, settings_hash=settings_hash):
+        return None
+    return store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash)
+
+
+def knot_records(store: Store, knots: Sequence[str], models: Sequence[Model],
+                 hashes: Mapping[str, str]) -> list[dict]:
+    """Per knot: its catalogue entry, families, and each model's stored states.
+
+    Returns
+    -------
+    list of dict
+        ``name``, ``knot`` (catalogue entry), ``families``, ``models``: model name →
+        ``{"model": Model, "states": Store.states(...) or None}``.
+    """
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.families import families_of
+
+    out = []
+    for name in knots:
+        k = get_knot(name)
+        out.append({"name": k.name, "knot": k, "families": families_of(k),
+                    "models": {m.name: {"model": m,
+                                        "states": _states(store, k.name, m, hashes[m.name])}
+                               for m in models}})
+    return out
+
+
+def _state_json(s: Mapping, converged: bool | None) -> dict:
+    return {"name": s["name"], "shape": s["shape"], "multiplicity": s["multiplicity"],
+            "epsilon": s["epsilon"], "eps_mean": s["eps_mean"], "eps_max": s["eps_max"],
+            "count": s["count"], "converged": converged,
+            "min_segment_distance": s["min_segment_distance"], "starts": s["starts"],
+            "representative": s["representative"], "seed": s["seed"],
+            "replica": s["replica"], "start": s["start"]}
+
+
+def _model_json(m: Model, st: Mapping | None) -> dict:
+    width = m.width()
+    if st is None:
+        return {"width": width, "replicas": 0, "ground": None, "metastable": [],
+                "converged": False, "settings_hash": None}
+    conv = is_converged(st["ground"])
+    return {"width": width, "replicas": st["replicas"], "settings_hash": st["settings_hash"],
+            "converged": conv, "ground": _state_json(st["ground"], conv),
+            "metastable": [_state_json(s, None) for s in st["metastable"]]}
+
+
+def json_entry(rec: Mapping, main_model: str) -> dict:
+    """The ``--json`` entry of one knot: name, n, i, crossing number, families, the ground
+    state of ``main_model`` (``shape``, ``multiplicity``, ``epsilon``, ``converged``) at top
+    level, every model's states under ``models``."""
+    k = rec["knot"]
+    models = {name: _model_json(v["model"], v["states"]) for name, v in rec["models"].items()}
+    g = models.get(main_model, {}).get("ground") or {}
+    return {"name": k.name, "n": k.bridge_number, "i": k.braid_index,
+            "crossing_number": k.crossing_number, "families": rec["families"],
+            "model": main_model, "shape": g.get("shape"), "multiplicity": g.get("multiplicity"),
+            "epsilon": g.get("epsilon"),
+            "converged": bool(models.get(main_model, {}).get("converged", False)),
+            "width": models.get(main_model, {}).get("width", {}).get("text"),
+            "models": models}
+
+
+def atlas_input(store: Store, rec: Mapping) -> dict:
+    """One knot in the input schema of :func:`stiffknots.report.atlas.write_atlas`, with the
+    chain of every state's representative replica."""
+    k = rec["knot"]
+    models = {}
+    for name, v in rec["models"].items():
+        m, st = v["model"], v["states"]
+        if st is None:
+            continue
+        radius = m.thickness / 2 if m.name == "tube" else None
+        conv = is_converged(st["ground"])
+
+        def state(s: Mapping, converged: bool | None, radius=radius) -> dict:
+            return {"shape": s["shape"], "multiplicity": s["multiplicity"],
+                    "epsilon": s["epsilon"], "eps_mean": s["eps_mean"], "count": s["count"],
+                    "converged": converged, "min_segment_distance": s["min_segment_distance"],
+                    "coords": store.coords(s["representative"]), "closed": True,
+                    "radius": radius}
+
+        models[name] = {"width": m.width()["text"], "replicas": st["replicas"],
+                        "ground": state(st["ground"], conv),
+                        "metastable": [state(s, None) for s in st["metastable"]]}
+    fam = rec["families"]
+    note = ("conjectured families: " + ", ".join(fam)) if fam else \
+        "in none of the conjectured families (n = i, 4-fold cage, 80)"
+    return {"name": k.name, "crossing_number": k.crossing_number, "n": k.bridge_number,
+            "i": k.braid_index, "families": fam, "note": note, "models": models}
+
+
+def _shape_class(g: Mapping | None) -> str | None:
+    """``CB(i)``, ``4C``, ``80``, ``other``: the class of a ground state (CB of any i)."""
+    if not g:
+        return None
+    return "CB(i)" if g["shape"] == "CB" else str(g["shape"])
+
+
+def family_study(grounds: Mapping[str, Mapping | None], *, model: str, width: str,
+                 limits: Sequence[int] = (7, 9)) -> dict:
+    """The paper's families against the ground states found (module docstring).
+
+    Parameters
+    ----------
+    grounds : mapping
+        Knot name → its ground state under ``model`` (``shape``, ``multiplicity``,
+        ``epsilon``, ``converged``), or None where nothing is stored. The knots swept.
+    model : str
+        The model of the ground states (``bead``).
+    width : str
+        The width they were computed at (every ε of the result carries it).
+    limits : sequence of int
+        The crossing-number columns ``n_c < c`` (the paper's 7 and 9).
+
+    Returns
+    -------
+    dict
+        ``model``, ``width``, ``catalogue`` (:func:`~stiffknots.knots.families.coverage` of
+        the catalogue through 10 crossings, with the paper's claims), ``groups`` (per column:
+        ``knots`` swept with a ground state, ``counts`` by class, ``in_family``,
+        ``as_predicted``, ``converged``), ``knots`` (per swept knot: families, predicted and
+        found shape, ε, converged), ``mismatch`` (a family's knot whose ground state is not
+        the predicted shape), ``no_family`` (knots in no family, with their shapes),
+        ``eps_n2`` (n → points), ``rule`` (convergence).
+    """
+    from stiffknots.knots.catalogue import catalogue, get_knot
+    from stiffknots.knots.families import (
+        EIGHTY_FAMILY_MAX_CROSSINGS,
+        coverage,
+        families_of,
+        predicted_shape,
+    )
+
+    per_knot = []
+    for name, g in grounds.items():
+        k = get_knot(name)
+        pred = predicted_shape(k)
+        found = None if not g else (g["shape"], g.get("multiplicity"))
+        per_knot.append({
+            "name": k.name, "crossing_number": k.crossing_number, "n": k.bridge_number,
+            "i": k.braid_index, "families": families_of(k),
+            "predicted": None if pred is None else _label(*pred),
+            "shape": None if found is None else _label(*found),
+            "class": _shape_class(g), "epsilon": None if not g else g["epsilon"],
+            "converged": None if not g else bool(g.get("converged")),
+            "as_predicted": None if (found is None or pred is None) else found == pred,
+        })
+    groups = []
+    top = max((r["crossing_number"] for r in per_knot), default=0)
+    for c in [*sorted(set(limits)), None]:
+        sel = [r for r in per_knot if r["shape"] is not None
+               and (c is None or r["crossing_number"] < c)]
+        counts: dict[str, int] = {}
+        for r in sel:
+            counts[r["class"]] = counts.get(r["class"], 0) + 1
+        groups.append({"label": f"n_c < {c}" if c is not None else f"all swept (n_c ≤ {top})",
+                       "limit": c, "knots": len(sel), "counts": counts,
+                       "in_family": sum(1 for r in sel if r["families"]),
+                       "as_predicted": sum(1 for r in sel if r["as_predicted"]),
+                       "converged": sum(1 for r in sel if r["converged"])})
+    cat = [k for k in catalogue(EIGHTY_FAMILY_MAX_CROSSINGS) if k.crossing_number >= 3]
+    cov = coverage(cat, limits)
+    paper = {"n_c < 7": 1.0, "n_c < 9": 0.75}
+    for row in cov:
+        row["paper"] = paper.get(row["label"])
+    return {
+        "model": model, "width": width, "rule": CONVERGENCE_RULE,
+        "catalogue": cov, "groups": groups, "knots": per_knot,
+        "mismatch": [r for r in per_knot if r["as_predicted"] is False],
+        "no_family": [r for r in per_knot if not r["families"]],
+        "eps_n2": eps_n2_points(per_knot),
+    }
+
+
+def _label(shape: str, multiplicity: int | None) -> str:
+    return f"CB(i={multiplicity})" if shape == "CB" else shape
+
+
+def eps_n2_points(per_knot: Sequence[Mapping]) -> dict[str, list[dict]]:
+    """n → the points (knot, n, i, ε, shape) of the knots with bridge number n = 2, 3, 4 and
+    a ground state (the input of :func:`stiffknots.report.figures.plot_eps_vs_n2`)."""
+    out: dict[str, list[dict]] = {str(n): [] for n in _N_VALUES}
+    for r in per_knot:
+        if r.get("epsilon") is None or r.get("n") not in _N_VALUES:
+            continue
+        out[str(r["n"])].append({"knot": r["name"], "n": r["n"], "i": r["i"],
+                                 "epsilon": r["epsilon"], "shape": r["class"]})
+    return out
+
+
+def families_table(study: Mapping) -> dict:
+    """The ``families`` argument of :func:`~stiffknots.report.atlas.write_atlas`: per column
+    (n_c < 7, n_c < 9, all swept) the ground-state classes, the knots in a family and those
+    whose ground state is the predicted shape, over the swept knots with a ground state; the
+    catalogue coverage and the paper's claims in the note."""
+    groups = []
+    for g in study["groups"]:
+        counts = {f"ground {c}": g["counts"].get(c, 0) for c in ("CB(i)", "4C", "80", "other")}
+        counts["in a conjectured family"] = g["in_family"]
+        counts["ground = the family's shape"] = g["as_predicted"]
+        counts["converged"] = g["converged"]
+        groups.append({"label": g["label"], "total": g["knots"], "counts": counts})
+    cov = "; ".join(f"{r['label']}: {r['covered']} of {r['knots']} "
+                    f"({100 * (r['fraction'] or 0):.0f} %"
+                    + (f", paper {100 * r['paper']:.0f} %" if r.get("paper") is not None
+                       else "") + ")"
+                    for r in study["catalogue"])
+    no_fam = ", ".join(f"{r['name']} ({r['shape'] or 'no result'})"
+                       for r in study["no_family"]) or "none"
+    mism = ", ".join(f"{r['name']} ({r['shape']}, predicted {r['predicted']})"
+                     for r in study["mismatch"]) or "none"
+    note = (f"Conjectured families (§VI C, §VII, Fig. 8): n = i → CB(i); two-box rational "
+            f"[ab] → 4-fold cage; the 80 family → 80. Ground states of the {study['model']} "
+            f"model at {study['width']}. Knots of the catalogue the three families hold — "
+            f"{cov}. Swept knots in no family: {no_fam}. Ground state other than the "
+            f"family's: {mism}. Converged: {study['rule']}.")
+    return {"title": "Conjectured families and the ground states found", "model":
+            study["model"], "groups": groups, "note": note}
+
+
+def _plot_eps_n2(study: Mapping, path: Path) -> Path | None:
+    from stiffknots.report.figures import plot_eps_vs_n2, save_figure
+
+    pts = [p for n in _N_VALUES for p in study["eps_n2"][str(n)]]
+    if not pts:
+        return None
+    ax = plot_eps_vs_n2(pts, labels=len(pts) <= 40,
+                        title=f"ground states, {study['model']} model, {study['width']}")
+    return save_figure(ax, path)
+
+
+def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
+              db: str | Path = DEFAULT_DB, out: str | Path = DEFAULT_OUT, seed: int = 0,
+              scheduler: str | None = None, workers: int | None = None,
+              max_replicas: int | None = None, listener: SweepListener | None = None,
+              thumbnails: bool = True, command: str | None = None) -> dict:
+    """Sweep ``knots`` × ``models`` on ``budget``, then write the atlas from the store.
+
+    Parameters
+    ----------
+    knots : sequence of str
+        Catalogue names (:func:`stiffknots.sweeps.resolve_knots`).
+    models : sequence of Model
+        The first is the model of the top-level fields, the family study and the default
+        view of the pages (``bead`` when present).
+    budget : Budget
+    db : path
+        The results database (created if missing; what it holds is reused).
+    out : path
+        The atlas folder (``index.html``, ``knots/``, ``atlas.json``, ``families.json``,
+        ``eps_vs_n2.png``).
+    seed, scheduler, workers, max_replicas, listener : see
+        :func:`stiffknots.sweeps.run_sweep` (``max_replicas``: replicas added to the
+        (knot, model)s not converged, up to that many in all).
+    thumbnails : bool
+        Draw the ground-state thumbnails.
+    command : str, optional
+        The command line, shown at the foot of the index page.
+
+    Returns
+    -------
+    dict
+        ``db``, ``html`` (None when interrupted: no pages are written then), ``sweep``
+        (:meth:`SweepResult.to_dict`), ``knots`` (:func:`json_entry` per knot),
+        ``families`` (:func:`family_study`), ``converged`` (model → fraction of the knots
+        with a converged ground state), ``files``.
+    """
+    from stiffknots.report.atlas import write_atlas
+
+    db, out = Path(db), Path(out)
+    main = next((m.name for m in models if m.name == "bead"), models[0].name)
+    with Store(db) as store:
+        sweep: SweepResult = run_sweep(knots, models, budget, store, seed=seed,
+                                       scheduler=scheduler, workers=workers,
+                                       max_replicas=max_replicas, listener=listener)
+        result: dict[str, Any] = {"db": str(db), "html": None, "sweep": sweep.to_dict()}
+        if sweep.interrupted:
+            return result
+        t0 = time.perf_counter()
+        hashes = sweep.settings_hash
+        recs = knot_records(store, knots, models, hashes)
+        entries = [json_entry(r, main) for r in recs]
+        width = next(m.width()["text"] for m in models if m.name == main)
+        grounds = {e["name"]: e["models"][main]["ground"] for e in entries}
+        study = family_study(grounds, model=main, width=width)
+        more = (f", up to {sweep.max_replicas} until converged"
+                if sweep.max_replicas > budget.replicas else "")
+        meta = {"budget": f"{budget.name}: {budget.replicas} replicas × {budget.moves:,} moves"
+                          + more,
+                "seed": seed, "models": "; ".join(m.width()["text"] for m in models),
+                "database": str(db), "converged": CONVERGENCE_RULE,
+                "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
+                **({"command": command} if command else {})}
+        html = write_atlas(out, [atlas_input(store, r) for r in recs],
+                           families=families_table(study), meta=meta, default_model=main,
+                           thumbnails=thumbnails)
+    files = {"html": str(html)}
+    fig = _plot_eps_n2(study, out / "eps_vs_n2.png")
+    if fig is not None:
+        files["eps_vs_n2"] = str(fig)
+    files["families"] = str(write_json(out / "families.json", {
+        "version": __version__, "seed": seed, "budget": budget.as_dict(),
+        "settings": {m.name: sweep_settings(m, budget) for m in models}, **study}))
+    converged = {m.name: (sum(1 for e in entries if e["models"][m.name]["converged"])
+                          / len(entries) if entries else None) for m in models}
+    result.update({"html": str(html), "knots": entries, "families": study,
+                   "converged": converged, "files": files,
+                   "atlas_seconds": time.perf_counter() - t0})
+    return result

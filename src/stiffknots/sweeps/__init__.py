@@ -1,0 +1,40 @@
+"""Sweeps: knots × models × replicas on Dask, resumable through the results store.
+
+Layer: above :mod:`stiffknots.store` and :mod:`stiffknots.report`, below the studies and the
+command line. A *job* is one replica of one (knot, model): the closed annealing of §VII
+(:class:`~stiffknots.problems.closed.ClosedAnneal`) at N = 150 under the paper's bead rule
+(d = 1/√2) or the tube model (w = 1/√2 unless set), with a *budget* of replicas and moves.
+Every job's store key is known before it runs, so a sweep skips what is stored and resumes
+after Ctrl-C, ``kill -9`` or a lost worker with nothing run or stored twice.
+
+Public API
+----------
+:func:`run_sweep`, :class:`SweepResult`, :class:`SweepListener`
+    Run the missing jobs on a local Dask cluster (or ``scheduler=``) and store each result
+    (:mod:`stiffknots.sweeps.run`).
+:data:`BUDGETS`, :func:`budget_of`, :class:`Budget`
+    tiny / small / default / full (:mod:`stiffknots.sweeps.budgets`).
+:class:`Model`, :func:`parse_models`
+    bead / tube at a width and N (:mod:`stiffknots.sweeps.models`).
+:func:`resolve_knots`, :func:`plan_sweep`, :func:`pending`, :func:`sweep_settings`
+    The jobs and their keys (:mod:`stiffknots.sweeps.plan`).
+:func:`is_converged`
+    The convergence rule of a ground state (:mod:`stiffknots.sweeps.convergence`).
+"""
+
+from stiffknots.sweeps.budgets import BUDGETS, Budget, budget_of
+from stiffknots.sweeps.convergence import RULE as CONVERGENCE_RULE
+from stiffknots.sweeps.convergence import is_converged
+from stiffknots.sweeps.models import MODELS, Model, parse_models
+from stiffknots.sweeps.plan import (
+    SweepJob,
+    pending,
+    plan_sweep,
+    resolve_knots,
+    sweep_settings,
+)
+from stiffknots.sweeps.run import SweepListener, SweepResult, run_sweep, store_replica
+
+__all__ = ["BUDGETS", "Budget", "budget_of", "CONVERGENCE_RULE", "is_converged", "MODELS",
+           "Model", "parse_models", "SweepJob", "pending", "plan_sweep", "resolve_knots",
+           "sweep_settings", "SweepListener", "SweepResult", "run_sweep", "store_replica"]

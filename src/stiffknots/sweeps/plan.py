@@ -1,0 +1,226 @@
+"""The jobs of a sweep: one per (knot, model, replica), each with its store key known in advance.
+
+A sweep over knots × models runs, for every (knot, model), the closed annealing problem of §VII
+(:class:`~stiffknots.problems.closed.ClosedAnneal`: its validation, starting chains, start
+polynomials and :class:`~stiffknots.problems.base.Job` objects) with ``budget.replicas``
+replicas of ``budget.moves`` moves; the Dask workers build it (:func:`build_jobs`) and run
+its jobs. Every replica is one :class:`SweepJob`, whose
+:class:`~stiffknots.store.keys.ReplicaKey` — knot, exclusion, N, thickness, seed, replica,
+settings hash — is computed *before* anything is built, from :func:`sweep_settings`, so that
+a resumed sweep skips the stored replicas without building their problems (:func:`pending`).
+The problem of a (knot, model) is built only when one of its replicas is to run
+(:func:`build_jobs`), and its settings are then checked against the key's.
+
+Starts. Every replica starts from one of the embeddings that exist for the knot among the
+closure of its braid word, the 4-fold cage of a two-box rational knot and the 80 of
+:mod:`stiffknots.knots.eighty_embedding` (tried only for the knots of
+:data:`~stiffknots.knots.families.EIGHTY_FAMILY`, since a failed search costs seconds, and
+not for the n = i knots, whose ground state is the circular braid (§VI C): an 80 start would
+spend a replica on a state known to lie above it), shared round-robin among the replicas
+(replica r gets start r mod k). The settings record the policy (``"start":
+"braid,cage,eighty"``), each stored row the start its replica got.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from stiffknots.engine.driver import AnnealSettings
+from stiffknots.errors import InvalidParameter, UserInputError
+from stiffknots.problems import validate as V
+from stiffknots.problems.base import Job
+from stiffknots.store import ReplicaKey, Store, canonical_json, settings_hash
+from stiffknots.sweeps.budgets import Budget
+from stiffknots.sweeps.models import Model, for_beads
+
+__all__ = ["PROBLEM", "START_POLICY", "SweepJob", "sweep_settings", "resolve_knots",
+           "plan_sweep", "pending", "sweep_starts", "build_jobs"]
+
+#: The problem every sweep solves (``settings["problem"]``).
+PROBLEM = "anneal"
+#: The starting embeddings a sweep draws from, in order (module docstring).
+START_POLICY = "braid,cage,eighty"
+
+
+def sweep_settings(model: Model, budget: Budget) -> dict[str, Any]:
+    """The settings of every replica of ``model`` under ``budget`` (the input of the key's
+    settings hash): ``AnnealSettings(moves, schedule, params=model.params()).as_dict()`` —
+    built as ClosedAnneal builds them, which :func:`build_jobs` checks — plus
+    ``problem`` and ``start`` (:func:`stiffknots.store.keys.settings_hash` says what belongs
+    there)."""
+    from stiffknots.engine.schedules import Schedule
+
+    s = AnnealSettings(moves=budget.moves, schedule=for_beads(Schedule(), model.beads),
+                       params=model.params())
+    s.validate()
+    # every replica is polished to its local minimum (problems.base.polish_run)
+    return {**s.as_dict(), "problem": PROBLEM, "start": START_POLICY, "polish": True}
+
+
+@dataclass(frozen=True)
+class SweepJob:
+    """One replica of one (knot, model) of a sweep, identified by its store key.
+
+    Attributes
+    ----------
+    knot : str
+        Catalogue name.
+    model : Model
+    replica : int
+    seed : int
+        The sweep's seed (the replica's own seed derives from it and ``replica``).
+    settings : dict
+        :func:`sweep_settings` of the model and budget.
+    key : ReplicaKey
+    """
+
+    knot: str
+    model: Model
+    replica: int
+    seed: int
+    settings: dict = field(compare=False, hash=False, repr=False)
+    key: ReplicaKey = field(compare=False, hash=False, repr=False)
+
+    @property
+    def id(self) -> str:
+        """``knot/model/replica`` (for messages)."""
+        return f"{self.knot}/{self.model.name}/r{self.replica}"
+
+    @property
+    def task_key(self) -> str:
+        """A Dask task key unique to the store key (a resubmitted job is the same task)."""
+        k = self.key
+        return (f"stiffknots-anneal-{k.knot}-{k.exclusion}-{k.thickness_key}-N{k.beads}-"
+                f"s{k.seed}-r{k.replica}-{k.settings_hash}")
+
+    @property
+    def group(self) -> tuple[str, str]:
+        """(knot, model name): the jobs of one problem."""
+        return self.knot, self.model.name
+
+
+def resolve_knots(knots: Iterable[str] | None = None, max_crossings: int | None = None
+                  ) -> list[str]:
+    """The catalogue names of a sweep, in table order, each once.
+
+    Parameters
+    ----------
+    knots : iterable of str, optional
+        Knot names in any usual spelling (``4_1``, ``4.1``, ``T(2,3)``).
+    max_crossings : int, optional
+        Every prime knot with 3 ≤ n_c ≤ ``max_crossings`` (3..13); with ``knots``, only those
+        of them with n_c ≤ ``max_crossings``.
+
+    Raises
+    ------
+    UserInputError
+        An unknown knot, the unknot, a knot above ``max_crossings``, no knot at all.
+    """
+    from stiffknots.knots.catalogue import MAX_CROSSINGS, catalogue, get_knot
+    from stiffknots.store import knot_sort_key
+
+    if max_crossings is not None:
+        max_crossings = V.integer("max_crossings", max_crossings, 3, MAX_CROSSINGS)
+    if knots is None:
+        if max_crossings is None:
+            raise InvalidParameter("knots", None, "a list of knot names, or max_crossings")
+        return [k.name for k in catalogue(max_crossings) if k.crossing_number >= 3]
+    names = []
+    for text in knots:
+        k = get_knot(str(text).strip())
+        if k.crossing_number < 3:
+            raise UserInputError(f"{text}: the unknot has no knotted ground state to sweep "
+                                 "(its minimum is the circle, ε = 2π²)")
+        if max_crossings is not None and k.crossing_number > max_crossings:
+            raise UserInputError(f"{k.name} has {k.crossing_number} crossings, more than "
+                                 f"max_crossings = {max_crossings}")
+        names.append(k.name)
+    if not names:
+        raise InvalidParameter("knots", "", "at least one knot name")
+    return sorted(dict.fromkeys(names), key=knot_sort_key)
+
+
+def plan_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget,
+               seed: int = 0) -> list[SweepJob]:
+    """Every job of a sweep, knot-major (all replicas of a knot's models, then the next
+    knot). Cheap: nothing is built, no embedding is made.
+
+    Parameters
+    ----------
+    knots : catalogue names (:func:`resolve_knots`).
+    models : the models (:func:`~stiffknots.sweeps.models.parse_models`).
+    budget : replicas and moves (:mod:`stiffknots.sweeps.budgets`).
+    seed : the sweep's seed (0 ≤ seed < 2⁶³).
+    """
+    seed = V.seed(seed)
+    budget.validate()
+    settings = {m: sweep_settings(m, budget) for m in models}
+    hashes = {m: settings_hash(s) for m, s in settings.items()}
+    return [SweepJob(k, m, r, seed, settings[m],
+                     ReplicaKey(k, m.exclusion, m.beads, m.thickness, seed, r, hashes[m]))
+            for k in knots for m in models for r in range(budget.replicas)]
+
+
+def pending(jobs: Sequence[SweepJob], store: Store) -> list[SweepJob]:
+    """The jobs whose key is not in ``store`` (in their order)."""
+    if not jobs:
+        return []
+    hashes = sorted({j.key.settings_hash for j in jobs})
+    seeds = sorted({j.seed for j in jobs})
+    knots = sorted({j.knot for j in jobs})
+    stored = store.keys(settings_hash=hashes, seed=seeds, problem=PROBLEM,
+                        knot=knots if len(knots) <= 100 else None)
+    return [j for j in jobs if j.key not in stored]
+
+
+def sweep_starts(knot: Any, beads: int, replicas: int) -> list[str]:
+    """One start per replica (module docstring): the embeddings that exist for ``knot`` among
+    braid, cage and (for the 80 family, n ≠ i) eighty, round-robin.
+
+    Raises
+    ------
+    EmbeddingError
+        No start fits in ``beads`` beads (the braid closure's message says how many it needs).
+    """
+    from stiffknots.knots.families import EIGHTY_FAMILY
+    from stiffknots.knots.starts import available_starts, split_replicas, start_chain
+
+    tried = ["braid", "cage"]
+    if knot.name in EIGHTY_FAMILY and not knot.n_equals_i:
+        tried.append("eighty")
+    found = available_starts(knot, beads, tried)
+    if not found:
+        start_chain(knot, "braid", beads)  # raises, saying why
+    return split_replicas(found, replicas)
+
+
+def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
+               settings: Mapping[str, Any]) -> dict[int, Job]:
+    """The problem's jobs of one (knot, model): replica → :class:`~stiffknots.problems.base.Job`.
+
+    Builds the :class:`~stiffknots.problems.closed.ClosedAnneal` problem (starts, their
+    HOMFLY-PT polynomials) and checks that its settings are those of the key.
+
+    Raises
+    ------
+    UserInputError
+        Through the problem's validation (e.g. an embedding that does not fit).
+    RuntimeError
+        The problem's settings differ from ``settings`` (a bug: the keys would lie).
+    """
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.problems.closed import ClosedAnneal
+
+    k = get_knot(knot)
+    starts = sweep_starts(k, model.beads, budget.replicas)
+    problem = ClosedAnneal(k.name, beads=model.beads, moves=budget.moves,
+                           replicas=budget.replicas, seed=seed, params=model.params(),
+                           start=starts, rounds=1, polish=settings.get("polish", True))
+    mine = {key: v for key, v in settings.items()
+            if key not in ("problem", "start", "polish")}
+    if canonical_json(problem.settings.as_dict()) != canonical_json(mine):
+        raise RuntimeError(f"the settings of {knot}/{model.name} differ from the sweep's key "
+                           "settings; this is a bug in stiffknots, please report it")
+    return {j.replica: j for j in problem.jobs()}

@@ -1,0 +1,344 @@
+"""Run a sweep: the jobs not yet stored, on Dask, each result stored as soon as it arrives.
+
+:func:`run_sweep` plans every job (:func:`~stiffknots.sweeps.plan.plan_sweep`), drops those
+whose key is stored (:func:`~stiffknots.sweeps.plan.pending`), and runs the rest on a Dask
+cluster (:func:`~stiffknots.sweeps.cluster.connect`), at most two jobs per worker thread
+submitted at a time (in plan order: knot by knot). The workers build each (knot, model)'s
+problem and run its replicas (:func:`~stiffknots.sweeps.cluster.run_task`). Every result
+comes back to the client, which
+
+1. refuses a replica whose knot type changed (never expected: a bug, never a data point —
+   it is reported, not stored);
+2. classifies its shape (:func:`stiffknots.analysis.classify`, with d = the model's
+   thickness: the bead distance, or the tube diameter);
+3. writes it to the store (:meth:`Store.put <stiffknots.store.sqlite.Store.put>`): one
+   transaction per row, so a killed client leaves whole rows or none, and a row whose key is
+   stored is not written again.
+
+Replicas until converged. With ``max_replicas`` above the budget's replicas, a (knot, model)
+whose replicas have all ended without a converged ground state
+(:mod:`stiffknots.sweeps.convergence`) gets ``step`` more replicas (the budget's moves and
+settings: the same ensemble), and so on up to ``max_replicas``; the n = i knots, whose
+circular braids two replicas agree on at once, then cost no more than they need.
+
+Interruption and resumption. Ctrl-C (KeyboardInterrupt) stops the sweep: the results that
+have already arrived are stored, the running jobs are cancelled, the cluster is closed and the
+result says ``interrupted``. The same sweep run again skips everything stored and runs the
+rest. A worker that dies is replaced by its nanny and its job rerun (Dask's scheduler); a job
+that kills ``allowed-failures`` workers in a row is reported as failed, as is a job whose
+problem cannot be built (an embedding that does not fit) or that raises: the others go on.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from stiffknots._version import __version__
+from stiffknots.problems import validate as V
+from stiffknots.store import KeyCollisionError, Store, row_from_replica, settings_hash
+from stiffknots.sweeps.budgets import Budget
+from stiffknots.sweeps.cluster import (
+    PROGRESS_TOPIC,
+    connect,
+    local_workers,
+    run_task,
+    scheduler_address,
+)
+from stiffknots.sweeps.convergence import is_converged
+from stiffknots.sweeps.models import Model
+from stiffknots.sweeps.plan import SweepJob, pending, plan_sweep, sweep_settings
+
+__all__ = ["SweepListener", "SweepResult", "run_sweep", "store_replica", "ensemble_converged"]
+
+
+class SweepListener:
+    """What a sweep tells its caller while it runs (every method a no-op here; the command
+    line draws a progress bar). Methods may be called from the Dask client's thread."""
+
+    def started(self, result: SweepResult) -> None:
+        """The plan is made: ``result.jobs`` planned, ``result.skipped`` stored already."""
+
+    def cluster(self, description: str, threads: int) -> None:
+        """Connected to the cluster."""
+
+    def progress(self, job: str, done: int, total: int, best: float | None = None,
+                 pid: int | None = None) -> None:
+        """A running job's moves ``done`` of ``total``, its lowest ε so far, the process id
+        of the worker running it."""
+
+    def finished(self, job: SweepJob, row: dict | None, error: str | None) -> None:
+        """A job ended: stored (``row``: its shape, ε, ...) or failed (``error``)."""
+
+    def added(self, jobs: int) -> None:
+        """``jobs`` more jobs to run: replicas added to a (knot, model) not yet converged."""
+
+
+@dataclass
+class SweepResult:
+    """What a sweep did.
+
+    Attributes
+    ----------
+    knots, models : the sweep's knots (catalogue names) and models.
+    budget : its replicas and moves; seed : its seed.
+    settings_hash : model name → the settings hash of its replicas (their store ensembles).
+    jobs : jobs planned; skipped : stored before the sweep began; ran : finished now;
+    written : rows written now (``ran`` minus those another writer stored first).
+    failed : ``{"job", "error"}`` per job that failed (not stored).
+    interrupted : stopped by Ctrl-C (the rest resumes with the same sweep).
+    wall_seconds : of the whole sweep; cpu_seconds : the finished replicas' CPU time.
+    workers : worker threads of the cluster; scheduler : ``"local"`` or its address.
+    max_replicas : the most replicas a (knot, model) may get; added : replicas planned beyond
+    the budget's for (knot, model)s not converged (counted in ``jobs``).
+    """
+
+    knots: list[str]
+    models: list[Model]
+    budget: Budget
+    seed: int
+    settings_hash: dict[str, str]
+    jobs: int = 0
+    skipped: int = 0
+    ran: int = 0
+    written: int = 0
+    failed: list[dict] = field(default_factory=list)
+    interrupted: bool = False
+    wall_seconds: float = 0.0
+    cpu_seconds: float = 0.0
+    workers: int = 0
+    scheduler: str = "local"
+    max_replicas: int = 0
+    added: int = 0
+    version: str = __version__
+
+    @property
+    def todo(self) -> int:
+        """Jobs this sweep had to run."""
+        return self.jobs - self.skipped
+
+    @property
+    def complete(self) -> bool:
+        """Every planned job is stored."""
+        return not self.interrupted and not self.failed and self.ran == self.todo
+
+    def to_dict(self) -> dict:
+        return {"knots": self.knots, "models": [m.name for m in self.models],
+                "widths": {m.name: m.width() for m in self.models},
+                "budget": self.budget.as_dict(), "seed": self.seed,
+                "settings_hash": self.settings_hash, "jobs": self.jobs,
+                "skipped": self.skipped, "ran": self.ran, "written": self.written,
+                "failed": self.failed, "interrupted": self.interrupted,
+                "wall_seconds": self.wall_seconds, "cpu_seconds": self.cpu_seconds,
+                "workers": self.workers, "scheduler": self.scheduler,
+                "max_replicas": self.max_replicas, "added": self.added,
+                "version": self.version}
+
+
+def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | None = None
+                  ) -> tuple[bool, dict]:
+    """Classify a verified replica and write it to ``store`` (one transaction).
+
+    Returns
+    -------
+    (written, row)
+        ``written`` False when the key was stored already; ``row`` as given to the store.
+    """
+    from stiffknots.analysis import classify
+
+    shape = classify(replica.coords, True, d=job.model.thickness)
+    width = job.model.width()
+    row, coords = row_from_replica(
+        replica, knot=job.knot, exclusion=job.model.exclusion, thickness=job.model.thickness,
+        seed=job.seed, settings=job.settings, beads=job.model.beads, shape=shape.label,
+        multiplicity=shape.multiplicity, problem=job.settings["problem"],
+        extra={"model": job.model.name, "budget": budget, "width": width["text"],
+               "shape_reason": shape.reason})
+    return store.put(row, coords), row
+
+
+def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str) -> bool:
+    """Whether the stored ground state of one (knot, model) ensemble is converged
+    (:func:`~stiffknots.sweeps.convergence.is_converged`); False when nothing is stored."""
+    if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
+                       thickness=model.thickness, settings_hash=settings_hash):
+        return False
+    st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash)
+    return is_converged(st["ground"])
+
+
+def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, store: Store, *,
+              seed: int = 0, scheduler: str | None = None, workers: int | None = None,
+              max_replicas: int | None = None, step: int = 2,
+              listener: SweepListener | None = None) -> SweepResult:
+    """Run every job of knots × models × replicas that ``store`` lacks; store each result.
+
+    Parameters
+    ----------
+    knots : sequence of str
+        Catalogue names (:func:`~stiffknots.sweeps.plan.resolve_knots`).
+    models : sequence of Model
+        E.g. :func:`~stiffknots.sweeps.models.parse_models` ``("bead,tube")``.
+    budget : Budget
+        Replicas and moves (:mod:`stiffknots.sweeps.budgets`).
+    store : Store
+        The results database (written by this process only).
+    seed : int
+        The sweep's seed; replica r of every (knot, model) gets the r-th seed derived from it.
+    scheduler : str, optional
+        Address of a running Dask scheduler; default: a local cluster.
+    workers : int, optional
+        Worker processes of the local cluster (default: one per core).
+    max_replicas : int, optional
+        Replicas are added, ``step`` at a time, to every (knot, model) whose ground state has
+        not converged once its replicas have ended
+        (:func:`~stiffknots.sweeps.convergence.is_converged`), up to ``max_replicas`` in all.
+        Default: the budget's replicas (nothing added). The added replicas have the budget's
+        moves and settings: they join the same ensemble, and a resumed sweep skips them too.
+    step : int
+        Replicas added at a time.
+    listener : SweepListener, optional
+        Told of the plan, the progress and each finished job.
+
+    Returns
+    -------
+    SweepResult
+        ``interrupted`` after Ctrl-C (the results that arrived are stored).
+
+    Raises
+    ------
+    UserInputError
+        Bad parameters, an unreachable scheduler — before any job runs.
+    """
+    listener = listener or SweepListener()
+    t0 = time.perf_counter()
+    if scheduler is None:  # a bad count or address is an error before anything starts
+        local_workers(workers)
+    else:
+        scheduler_address(scheduler)
+    max_r = budget.replicas if max_replicas is None else V.integer(
+        "max_replicas", max_replicas, budget.replicas, V.MAX_REPLICAS)
+    step = V.integer("step", step, 1, V.MAX_REPLICAS)
+    jobs = plan_sweep(knots, models, budget, seed)
+    res = SweepResult(list(knots), list(models), budget, int(seed),
+                      {m.name: settings_hash(sweep_settings(m, budget)) for m in models},
+                      jobs=len(jobs), scheduler=scheduler or "local", max_replicas=max_r)
+    todo = pending(jobs, store)
+    res.skipped = len(jobs) - len(todo)
+    # per (knot, model): its model, replicas planned so far, jobs not yet ended
+    groups: dict[tuple[str, str], dict] = {}
+    for j in jobs:
+        groups.setdefault(j.group, {"knot": j.knot, "model": j.model,
+                                    "replicas": budget.replicas, "open": 0})
+    for j in todo:
+        groups[j.group]["open"] += 1
+
+    def extend(g: dict) -> list[SweepJob]:
+        """The replicas to add to a (knot, model) whose replicas have all ended."""
+        while g["replicas"] < max_r and not ensemble_converged(
+                store, g["knot"], g["model"], res.settings_hash[g["model"].name]):
+            n = min(max_r, g["replicas"] + step)
+            more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
+                              seed)[g["replicas"]:]
+            g["replicas"] = n
+            new = pending(more, store)
+            res.jobs += len(more)
+            res.skipped += len(more) - len(new)
+            res.added += len(more)
+            if new:
+                g["open"] += len(new)
+                return new
+        return []
+
+    feed: deque[SweepJob] = deque(todo)
+    for g in groups.values():
+        if g["open"] == 0:
+            feed.extend(extend(g))
+    listener.started(res)
+    if not feed:
+        res.wall_seconds = time.perf_counter() - t0
+        return res
+
+    with connect(scheduler, workers) as client:
+        from stiffknots.sweeps.cluster import import_distributed
+
+        import_distributed()
+        from distributed import as_completed
+
+        threads = sum(client.nthreads().values()) or 1
+        res.workers = threads
+        listener.cluster(str(scheduler or f"local cluster, {threads} worker processes"),
+                         threads)
+        client.subscribe_topic(PROGRESS_TOPIC, lambda ev: _progress(listener, ev))
+        limit = max(4, 2 * threads)
+        inflight: dict[str, tuple[SweepJob, Any]] = {}
+        ac = as_completed()
+
+        def fail(sj: SweepJob, error: str) -> None:
+            res.failed.append({"job": sj.id, "error": error})
+            listener.finished(sj, None, error)
+
+        def top_up() -> None:
+            while len(inflight) < limit and feed:
+                sj = feed.popleft()
+                b = replace(budget, replicas=groups[sj.group]["replicas"])
+                fut = client.submit(run_task, sj, b, key=sj.task_key)
+                inflight[fut.key] = (sj, fut)
+                ac.add(fut)
+
+        def collect(fut: Any) -> None:
+            sj, _ = inflight.pop(fut.key)
+            g = groups[sj.group]
+            g["open"] -= 1
+            if fut.status != "finished":
+                exc = fut.exception() if fut.status == "error" else None
+                fail(sj, f"{type(exc).__name__}: {exc}" if exc is not None else fut.status)
+            else:
+                r = fut.result()
+                fut.release()
+                if not r.knot_verified:
+                    fail(sj, f"TopologyChangedError: the replica ended as {r.knot} (a bug in "
+                             f"stiffknots, please report it with seed {sj.seed}); not stored")
+                else:
+                    try:
+                        written, row = store_replica(store, sj, r, budget=budget.name)
+                    except KeyCollisionError as e:
+                        fail(sj, f"KeyCollisionError: {e}")
+                    else:
+                        res.ran += 1
+                        res.written += int(written)
+                        res.cpu_seconds += float(r.cpu_time or 0.0)
+                        listener.finished(sj, row, None)
+            if g["open"] == 0 and not res.interrupted:
+                new = extend(g)
+                if new:
+                    feed.extend(new)
+                    listener.added(len(new))
+
+        try:
+            top_up()
+            for fut in ac:
+                collect(fut)
+                top_up()
+        except KeyboardInterrupt:
+            res.interrupted = True
+            for _key, (_sj, fut) in list(inflight.items()):
+                if fut.status == "finished":  # arrived meanwhile: keep it
+                    collect(fut)
+            futures = [f for _, f in inflight.values()]
+            if futures:
+                client.cancel(futures)
+    res.wall_seconds = time.perf_counter() - t0
+    return res
+
+
+def _progress(listener: SweepListener, event: Any) -> None:
+    try:
+        _, msg = event
+        listener.progress(msg["job"], int(msg["done"]), int(msg["total"]), msg.get("best"),
+                          msg.get("pid"))
+    except Exception:  # noqa: BLE001 (a progress display never stops a sweep)
+        pass

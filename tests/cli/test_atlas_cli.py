@@ -1,0 +1,289 @@
+"""``stiffknots atlas`` and ``stiffknots db``: the --json shape, bad options (exit 2, one
+line), and the sweep process killed (kill -9) or interrupted (Ctrl-C) mid-run, then resumed by
+the same command with every replica stored exactly once and no worker left running."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import psutil
+import pytest
+
+from stiffknots.store import Store
+from stiffknots.sweeps import BUDGETS, parse_models, plan_sweep, sweep_settings
+
+D = 1 / math.sqrt(2)
+
+
+def cli(*args, timeout=600):
+    p = subprocess.run([sys.executable, "-m", "stiffknots.cli", *args], capture_output=True,
+                       text=True, timeout=timeout)
+    return p.returncode, p.stdout, p.stderr
+
+
+def _error_line(err: str) -> str:
+    lines = [ln for ln in err.splitlines() if ln.strip() and "Warning" not in ln
+             and "warnings.warn" not in ln]
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+@pytest.mark.parametrize("args", [
+    (),  # neither --max-crossings nor --knots
+    ("--max-crossings", "2"),
+    ("--max-crossings", "20"),
+    ("--knots", "4_9"),
+    ("--knots", "0_1"),
+    ("--knots", ","),
+    ("--knots", "6_1", "--max-crossings", "5"),
+    ("--knots", "3_1", "--models", "soft"),
+    ("--knots", "3_1", "--models", "tube", "--w", "1.5"),
+    ("--knots", "3_1", "--models", "bead", "--w", "0.5"),
+    ("--knots", "3_1", "--budget", "huge"),
+    ("--knots", "3_1", "--replicas", "0"),
+    ("--knots", "3_1", "--moves", "10"),
+    ("--knots", "3_1", "--seed", "-1"),
+    ("--knots", "3_1", "--workers", "0"),
+    ("--knots", "3_1", "--max-replicas", "1"),  # fewer than the budget's 2
+    ("--knots", "3_1", "--scheduler", "not an address"),
+])
+def test_atlas_bad_options_exit_2_one_line(tmp_path, args):
+    rc, out, err = cli("atlas", *args, "--out", str(tmp_path / "a"), "--db",
+                       str(tmp_path / "a.db"))
+    assert rc == 2, (out, err)
+    assert "Traceback" not in err
+    assert _error_line(err).startswith("error:")
+    assert not (tmp_path / "a.db").exists() or args[-1] == "not an address"
+
+
+def test_atlas_bad_paths_exit_2(tmp_path):
+    f = tmp_path / "file"
+    f.write_text("x")
+    rc, _, err = cli("atlas", "--knots", "3_1", "--out", str(f), "--db", str(tmp_path / "a.db"))
+    assert rc == 2 and _error_line(err).startswith("error: --out")
+    rc, _, err = cli("atlas", "--knots", "3_1", "--out", str(tmp_path / "o"), "--db",
+                     str(tmp_path))
+    assert rc == 2 and _error_line(err).startswith("error: --db")
+    rc, _, err = cli("atlas", "--knots", "3_1", "--out", str(tmp_path / "o"), "--db", str(f))
+    assert rc == 2 and "not an SQLite database" in _error_line(err)
+
+
+def test_atlas_json_shape(tmp_path):
+    """A tiny sweep of one knot (2 replicas on 2 workers), then the pages and the JSON."""
+    out, db = tmp_path / "atlas", tmp_path / "r.db"
+    rc, stdout, err = cli("atlas", "--knots", "3_1", "--models", "bead", "--budget", "tiny",
+                          "--workers", "2", "--out", str(out), "--db", str(db), "--json")
+    assert rc == 0, err
+    d = json.loads(stdout)
+    assert d["db"] == str(db) and d["html"] == str(out / "index.html")
+    assert (out / "index.html").exists() and (out / "knots" / "3_1.html").exists()
+    assert (out / "families.json").exists() and (out / "atlas.json").exists()
+    (k,) = d["knots"]
+    assert {"name", "n", "i", "crossing_number", "shape", "multiplicity", "epsilon",
+            "converged", "models"} <= set(k)
+    assert (k["name"], k["n"], k["i"], k["crossing_number"]) == ("3_1", 2, 2, 3)
+    assert k["families"] == ["n=i", "80"] and k["model"] == "bead"
+    m = k["models"]["bead"]
+    assert m["replicas"] == 2 and m["width"]["d"] == pytest.approx(D)
+    assert m["width"]["beads"] == 150 and "d = 1/√2, N = 150" in m["width"]["text"]
+    g = m["ground"]
+    assert k["shape"] == g["shape"] and k["epsilon"] == g["epsilon"]
+    assert k["multiplicity"] == g["multiplicity"] and k["converged"] == m["converged"]
+    assert g["count"] + sum(s["count"] for s in m["metastable"]) == 2
+    assert isinstance(k["converged"], bool)
+    assert k["epsilon"] >= 8 * math.pi**2  # above the lower bound 2π²n² (n = 2)
+    sw = d["sweep"]
+    assert (sw["jobs"], sw["skipped"], sw["ran"], sw["failed"]) == (2, 0, 2, [])
+    assert sw["budget"] == {"name": "tiny", "replicas": 2, "moves": 200_000}
+    fam = d["families"]
+    assert [r["label"] for r in fam["catalogue"]][:2] == ["n_c < 7", "n_c < 9"]
+    assert fam["catalogue"][0]["fraction"] == 1.0
+    with Store(db, create=False) as st:
+        assert st.count() == 2
+        assert {r["seed"] for r in st.replicas()} == {0}
+    # the same command again: nothing to run, the same answer
+    rc, stdout2, err = cli("atlas", "--knots", "3_1", "--models", "bead", "--budget", "tiny",
+                           "--workers", "2", "--out", str(out), "--db", str(db), "--json")
+    assert rc == 0, err
+    d2 = json.loads(stdout2)
+    assert (d2["sweep"]["skipped"], d2["sweep"]["ran"]) == (2, 0)
+    assert d2["knots"][0]["epsilon"] == k["epsilon"]
+
+
+# -- the results database ------------------------------------------------------------------
+
+
+def _synthetic_db(path: Path) -> Path:
+    """Rows of 3_1 (bead: 2 CB; tube: 1 CB) and 4_1 (bead: 4C + 80) as a sweep stores them."""
+    bead, tube = parse_models("bead,tube")
+    with Store(path) as st:
+        for knot, model, r, eps, shape, mult in [
+                ("3_1", bead, 0, 79.1, "CB", 2), ("3_1", bead, 1, 79.3, "CB", 2),
+                ("3_1", tube, 0, 80.2, "CB", 2),
+                ("4_1", bead, 0, 128.4, "4C", None), ("4_1", bead, 1, 147.0, "80", None)]:
+            st.put({"knot": knot, "exclusion": model.exclusion, "beads": 150,
+                    "thickness": model.thickness, "seed": 0, "replica": r,
+                    "settings": sweep_settings(model, BUDGETS["small"]), "epsilon": eps,
+                    "min_segment_distance": 0.6, "wall_seconds": 1.0, "shape": shape,
+                    "multiplicity": mult, "start": "braid"}, np.zeros((150, 3)) + r)
+    return path
+
+
+def test_db_states_and_grounds(tmp_path):
+    db = _synthetic_db(tmp_path / "s.db")
+    rc, out, err = cli("db", "--db", str(db), "states", "3.1", "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    assert d["knot"] == "3_1" and d["replicas"] == 3 and len(d["ensembles"]) == 2
+    bead = next(e for e in d["ensembles"] if e["exclusion"] == "bead")
+    assert bead["ground"]["name"] == "CB(i=2)" and bead["ground"]["count"] == 2
+    assert bead["converged"] is True and "N = 150" in bead["width"]
+    tube = next(e for e in d["ensembles"] if e["exclusion"] == "tube")
+    assert tube["converged"] is False  # one replica
+    rc, out, _ = cli("db", "--db", str(db), "states", "3_1", "--model", "tube", "--json")
+    assert [e["exclusion"] for e in json.loads(out)["ensembles"]] == ["tube"]
+    rc, out, err = cli("db", "--db", str(db), "states", "4_1")
+    assert rc == 0 and "4C" in out and "metastable" in out
+    csv = tmp_path / "g" / "grounds.csv"
+    rc, out, err = cli("db", "--db", str(db), "grounds", "--csv", str(csv), "--json")
+    assert rc == 0, err
+    g = json.loads(out)
+    assert [(r["knot"], r["exclusion"], r["state"]) for r in g["grounds"]] == [
+        ("3_1", "bead", "CB(i=2)"), ("3_1", "tube", "CB(i=2)"), ("4_1", "bead", "4C")]
+    assert [r["converged_rule"] for r in g["grounds"]] == [True, False, False]
+    assert csv.read_text().splitlines()[0].startswith("knot,exclusion,beads")
+    assert len(csv.read_text().splitlines()) == 4
+    rc, out, err = cli("db", "--db", str(db), "grounds")
+    assert rc == 0 and "CB(i=2)" in out
+
+
+@pytest.mark.parametrize("args", [
+    ("states", "3_1"),  # no database there
+    ("states", "5_2"),  # nothing stored for it
+    ("states", "4_9"),  # not a knot
+    ("states", "3_1", "--model", "soft"),
+    ("grounds", "--csv", "."),
+])
+def test_db_mistakes_exit_2(tmp_path, args):
+    db = tmp_path / "s.db" if args != ("states", "3_1") else tmp_path / "none.db"
+    if db.name == "s.db":
+        _synthetic_db(db)
+    rc, out, err = cli("db", "--db", str(db), *args)
+    assert rc == 2, (out, err)
+    assert _error_line(err).startswith("error:")
+    assert not (tmp_path / "none.db").exists()  # a query never creates a database
+
+
+# -- kill -9 and Ctrl-C of the whole sweep ---------------------------------------------------
+
+SWEEP = ("--knots", "3_1,4_1", "--models", "bead", "--replicas", "2", "--moves", "2000000",
+         "--workers", "2")
+
+
+def _start(tmp_path):
+    return subprocess.Popen(
+        [sys.executable, "-m", "stiffknots.cli", "atlas", *SWEEP, "--out",
+         str(tmp_path / "atlas"), "--db", str(tmp_path / "r.db"), "--json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _rows(db: Path) -> int:
+    if not db.exists():
+        return 0
+    try:
+        with sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5) as con:
+            return con.execute("SELECT count(*) FROM replicas").fetchone()[0]
+    except sqlite3.OperationalError:  # the schema is being created
+        return 0
+
+
+def _wait_rows(proc, db: Path, at_least: int, timeout: float = 400) -> int:
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        n = _rows(db)
+        if n >= at_least:
+            return n
+        if proc.poll() is not None:
+            raise AssertionError(f"the sweep ended (rc {proc.returncode}) before storing "
+                                 f"{at_least} rows: {proc.stderr.read()[-2000:]}")
+        time.sleep(0.1)
+    raise AssertionError("timed out waiting for rows")
+
+
+def _descendants(pid: int) -> list[psutil.Process]:
+    try:
+        return psutil.Process(pid).children(recursive=True)
+    except psutil.NoSuchProcess:
+        return []
+
+
+def _gone(procs: list[psutil.Process], timeout: float = 30) -> list[int]:
+    """The processes still running after ``timeout`` seconds."""
+    _, alive = psutil.wait_procs(procs, timeout=timeout)
+    return [p.pid for p in alive if p.status() != psutil.STATUS_ZOMBIE]
+
+
+def _check_resumed(tmp_path, before: int):
+    rc, out, err = cli("atlas", *SWEEP, "--out", str(tmp_path / "atlas"), "--db",
+                       str(tmp_path / "r.db"), "--json")
+    assert rc == 0, err
+    sw = json.loads(out)["sweep"]
+    assert sw["skipped"] == before and sw["ran"] == 4 - before and not sw["failed"]
+    jobs = plan_sweep(["3_1", "4_1"], parse_models("bead"),
+                      BUDGETS["tiny"].__class__("custom", 2, 2_000_000), seed=0)
+    with Store(tmp_path / "r.db", create=False) as st:
+        assert st.keys() == {j.key for j in jobs}
+        assert st.count() == 4 and st.check()["ok"]
+
+
+@pytest.mark.slow
+def test_kill_9_mid_sweep_then_resume(tmp_path):
+    proc = _start(tmp_path)
+    try:
+        before = _wait_rows(proc, tmp_path / "r.db", 1)
+        kids = _descendants(proc.pid)
+        assert any("spawn_main" in " ".join(k.cmdline()) for k in kids), kids
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == -signal.SIGKILL
+    assert not _gone(kids), "worker processes outlived the killed sweep"
+    before = _rows(tmp_path / "r.db")
+    assert 1 <= before < 4, "the kill came too late to test a resume"
+    with Store(tmp_path / "r.db", create=False) as st:
+        assert st.check()["ok"]  # whole rows only
+    _check_resumed(tmp_path, before)
+
+
+@pytest.mark.slow
+def test_ctrl_c_mid_sweep_exits_130_then_resume(tmp_path):
+    proc = _start(tmp_path)
+    try:
+        _wait_rows(proc, tmp_path / "r.db", 1)
+        kids = _descendants(proc.pid)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert _error_line(err).startswith("interrupted: ")
+    assert "run the same command to resume" in err
+    d = json.loads(out)
+    assert d["sweep"]["interrupted"] and d["html"] is None
+    assert not _gone(kids, 15), "worker processes outlived the interrupted sweep"
+    before = _rows(tmp_path / "r.db")
+    assert before == d["sweep"]["ran"] and 1 <= before < 4
+    _check_resumed(tmp_path, before)

@@ -1,0 +1,68 @@
+"""resample: N unit bonds on the user's polygon, knot type kept (condition, certificate,
+HOMFLY-PT check), thickness w = (w/L)·N."""
+
+import numpy as np
+import pytest
+
+from helpers import DATA
+from stiffknots.chain import Chain, regular_polygon
+from stiffknots.errors import InvalidParameter
+from stiffknots.formats import load
+from stiffknots.knots.identify import homfly_code
+from stiffknots.knots.resample import (
+    ResampleError,
+    minimal_resample_beads,
+    resample,
+    separation_distance,
+)
+
+RIDGERUNNER = DATA / "curves" / "ridgerunner"
+
+
+@pytest.mark.parametrize("stem,n", [("3.1", 150), ("8.18", 150), ("10.132", 120), ("5.2", 60)])
+def test_unit_bonds_same_polynomial(stem, n):
+    c = load(RIDGERUNNER / f"{stem}.vect")
+    r = resample(c, n, w_over_L=0.005)
+    assert r.closed and r.n_beads == n
+    assert np.max(np.abs(r.bond_lengths() - 1.0)) <= 1e-12
+    assert r.meta["homfly"] == homfly_code(c.coords)  # chiral: identical, mirror included
+    assert r.meta["a_max"] < r.meta["D_2l"]
+    assert r.meta["w"] == pytest.approx(0.005 * n) and r.meta["tube_fits"] in (True, False)
+    assert r.meta["resampled_from"] == c.n_beads
+
+
+def test_too_few_beads_refused_with_the_smallest_that_works():
+    c = load(RIDGERUNNER / "8.18.vect")
+    nmin = minimal_resample_beads(c.coords)
+    assert 20 < nmin < 150
+    with pytest.raises(ResampleError, match=f">= {nmin}"):
+        resample(c, 8)  # neither the sufficient condition nor the Δ-moves hold
+    assert resample(c, nmin, check=False).n_beads == nmin
+    # below the condition's N, a resampling whose every Δ-move is certified is accepted, and
+    # the polynomial check (check=True) confirms the type
+    try:
+        r = resample(c, nmin - 5)
+    except ResampleError:
+        pass
+    else:
+        assert r.n_beads == nmin - 5 and r.meta["homfly"]
+
+
+def test_separation_distance_of_a_circle():
+    # points of a circle of radius R at arclength >= λ are >= 2R sin(λ/2R) apart
+    c = regular_polygon(400)
+    R = c.coords[0, 0]
+    lam = 40.0
+    D = separation_distance(c.coords, lam)
+    assert D <= 2 * R * np.sin(lam / (2 * R)) + 1e-9
+    assert D > 2 * R * np.sin((lam - lam / 4 - 1) / (2 * R)) - 1e-9
+
+
+def test_bad_arguments():
+    c = Chain(regular_polygon(30).coords[:10], closed=False)
+    with pytest.raises(ValueError, match="open"):
+        resample(c, 20)
+    with pytest.raises(InvalidParameter, match="n_beads"):
+        resample(regular_polygon(30), 2)
+    with pytest.raises(InvalidParameter, match="w_over_L"):
+        resample(regular_polygon(30), 20, w_over_L=-1)

@@ -1,0 +1,87 @@
+"""The template of every problem (problems/base.py): convergence verdicts and adaptive rounds,
+one name per knot, verification by the polynomial of the start."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from stiffknots.problems.base import Problem, Replica, verdict
+from stiffknots.problems.closed import anneal
+
+
+class _Rule(Problem):
+    """A problem reduced to its convergence rule (state = (label, value) per replica)."""
+
+    def __init__(self, agree=2, rel_tol=1e-3):
+        self.agree, self.rel_tol = agree, rel_tol
+
+    def state_of(self, r):
+        return r.observables["label"], r.observables["value"]
+
+
+def _r(label, value):
+    r = Replica.__new__(Replica)
+    r.observables = {"label": label, "value": value}
+    return r
+
+
+def test_verdict_counts_the_lowest_state_only():
+    rule = _Rule()
+    ok, why = verdict(rule, [_r("CB2", 79.03), _r("CB2", 79.05), _r("4C", 128.4)])
+    assert ok and "2 of 3" in why  # 79.05 is within 1e-3 of 79.03
+    ok, why = verdict(rule, [_r("CB2", 79.03), _r("CB2", 79.2), _r("CB2", 79.3)])
+    assert not ok and "1 of 3" in why and "2 needed" in why  # beyond the tolerance
+    ok, _ = verdict(rule, [_r("4C", 128.4), _r("other", 128.41)])
+    assert not ok  # same ε, another shape: another state
+    ok, _ = verdict(_Rule(agree=3), [_r("80", 147.3)] * 2)
+    assert not ok
+    assert verdict(rule, []) == (False, "no replica finished")
+
+
+def test_an_easy_knot_converges_in_one_round():
+    res = anneal("3_1", moves=1_000_000, replicas=2, seed=0, rounds=4)
+    assert res.converged and res.rounds == 1 and len(res.replicas) == 2
+    assert "reached by 2 of 2" in res.convergence
+    d = res.to_dict()
+    assert d["converged"] is True and d["convergence"] == res.convergence
+    assert all(r.knot == "3_1" and r.observables["shape"] == "CB2" for r in res.replicas)
+
+
+def test_a_budget_too_small_cannot_converge():
+    # 7_4 after 100,000 moves: every replica (polished to its local minimum) stops in a
+    # different state; a second round adds replicas (new seeds, round-robin starts) and the
+    # verdict says why it is not done
+    res = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=2)
+    assert not res.converged and res.rounds == 2 and len(res.replicas) == 4
+    assert "after 2 rounds (the budget)" in res.convergence
+    assert sorted(r.replica for r in res.replicas) == [0, 1, 2, 3]
+    assert len({r.seed for r in res.replicas}) == 4
+    fixed = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=1)
+    # the first round of an adaptive run is the fixed-budget run, replica for replica
+    by_id = {r.replica: r for r in res.replicas}
+    for r in fixed.replicas:
+        assert np.array_equal(by_id[r.replica].coords, r.coords)
+
+
+def test_the_knot_of_a_result_is_one_catalogue_name():
+    # HOMFLY-PT cannot tell 5_1 from 10_132; the run's type is kept by construction and the
+    # polynomial check confirms it, so the result says 5_1 everywhere
+    res = anneal("5_1", moves=100_000, replicas=1, seed=0, rounds=1)
+    d = res.to_dict()
+    assert d["knot"] == "5_1" and all(r["knot"] == "5_1" for r in d["replicas"])
+    assert "unchanged" in res.best.knot_check
+
+
+def test_a_knot_beyond_the_table_is_verified_by_its_start():
+    # 13a_1 is not in topoly's HOMFLY-PT table: the final chain must have its start's
+    # polynomial (it used to end in a false 'TopologyChangedError')
+    res = anneal("13a_1", moves=50_000, replicas=1, seed=0, rounds=1)
+    assert res.best.knot_verified and res.best.knot == "13a_1"
+
+
+@pytest.mark.parametrize("kw,param", [({"rounds": 0}, "rounds"), ({"agree": 0}, "agree"),
+                                      ({"rel_tol": 0.0}, "rel_tol")])
+def test_bad_rule_is_refused(kw, param):
+    with pytest.raises(ValueError, match=param):
+        anneal("3_1", moves=10_000, replicas=1, **kw)

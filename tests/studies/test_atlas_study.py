@@ -1,0 +1,186 @@
+"""The atlas study without a cluster: family statistics from synthetic store rows (a small
+fixed set whose answer is known), the --json entries, the atlas input, the catalogue's family
+coverage against the paper (§VII: all knots with n_c < 7, 75 % of those with n_c < 9)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from stiffknots.knots.catalogue import catalogue, get_knot
+from stiffknots.knots.families import (
+    EIGHTY_FAMILY,
+    coverage,
+    families_of,
+    predicted_shape,
+)
+from stiffknots.store import Store
+from stiffknots.studies.atlas import (
+    atlas_input,
+    eps_n2_points,
+    families_table,
+    family_study,
+    json_entry,
+    knot_records,
+)
+from stiffknots.sweeps import BUDGETS, parse_models, sweep_settings
+
+D = 1 / math.sqrt(2)
+
+# knot → (ε, shape, multiplicity) of its bead replicas: a fixed set with a known answer
+ROWS = {
+    "3_1": [(79.1, "CB", 2), (79.4, "CB", 2)],  # n = i: CB(2) as predicted, converged
+    "4_1": [(128.4, "4C", None), (128.9, "4C", None), (147.0, "80", None)],  # 4C, converged
+    "5_2": [(147.3, "80", None)],  # a cage knot whose ground is the 80: a mismatch
+    "6_2": [(153.0, "80", None), (160.0, "other", None)],  # 80 as predicted, not converged
+    "7_4": [(190.0, "other", None)],  # in no family
+    "8_19": [(181.0, "CB", 3), (181.5, "CB", 3)],  # n = i = 3: CB(3)
+}
+
+
+@pytest.fixture()
+def store(tmp_path):
+    bead, tube = parse_models("bead,tube")
+    st = Store(tmp_path / "s.db")
+    for knot, reps in ROWS.items():
+        for r, (eps, shape, mult) in enumerate(reps):
+            st.put({"knot": knot, "exclusion": "bead", "beads": 150, "thickness": D,
+                    "seed": 0, "replica": r, "settings": sweep_settings(bead, BUDGETS["small"]),
+                    "epsilon": eps, "min_segment_distance": 0.6, "wall_seconds": 1.0,
+                    "shape": shape, "multiplicity": mult, "start": "braid"},
+                   np.arange(450.0).reshape(150, 3) + r)
+    # a replica of another budget: another ensemble, never mixed in
+    st.put({"knot": "5_2", "exclusion": "bead", "beads": 150, "thickness": D, "seed": 0,
+            "replica": 0, "settings": sweep_settings(bead, BUDGETS["tiny"]), "epsilon": 100.0,
+            "min_segment_distance": 0.6, "wall_seconds": 1.0, "shape": "4C"},
+           np.zeros((150, 3)))
+    yield st
+    st.close()
+
+
+def _records(store):
+    bead, tube = parse_models("bead,tube")
+    hashes = {"bead": _hash(bead), "tube": _hash(tube)}
+    return knot_records(store, list(ROWS) + ["9_1"], [bead, tube], hashes)
+
+
+def _hash(model):
+    from stiffknots.store import settings_hash
+
+    return settings_hash(sweep_settings(model, BUDGETS["small"]))
+
+
+def test_family_statistics_from_store_rows(store):
+    entries = [json_entry(r, "bead") for r in _records(store)]
+    grounds = {e["name"]: e["models"]["bead"]["ground"] for e in entries}
+    assert grounds["9_1"] is None  # swept, nothing stored
+    study = family_study(grounds, model="bead", width="bead rule d = 1/√2, N = 150")
+    by = {k["name"]: k for k in study["knots"]}
+    assert by["3_1"]["predicted"] == by["3_1"]["shape"] == "CB(i=2)"
+    assert by["8_19"]["predicted"] == by["8_19"]["shape"] == "CB(i=3)"
+    assert (by["5_2"]["predicted"], by["5_2"]["shape"]) == ("4C", "80")
+    assert by["5_2"]["epsilon"] == 147.3  # the other budget's 100.0 is not this ensemble
+    assert by["6_2"]["as_predicted"] is True and by["6_2"]["converged"] is False
+    assert by["7_4"]["families"] == [] and by["7_4"]["predicted"] is None
+    assert [r["name"] for r in study["mismatch"]] == ["5_2"]
+    assert [(r["name"], r["shape"]) for r in study["no_family"]] == [("7_4", "other")]
+    g7, g9, gall = study["groups"]
+    assert (g7["label"], g9["label"], gall["label"]) == ("n_c < 7", "n_c < 9",
+                                                          "all swept (n_c ≤ 9)")
+    # n_c < 7: 3_1, 4_1, 5_2, 6_2
+    assert g7["knots"] == 4
+    assert g7["counts"] == {"CB(i)": 1, "4C": 1, "80": 2}
+    assert (g7["in_family"], g7["as_predicted"], g7["converged"]) == (4, 3, 2)
+    # n_c < 9 adds 7_4 and 8_19; 9_1 has no result
+    assert g9["knots"] == gall["knots"] == 6
+    assert g9["counts"] == {"CB(i)": 2, "4C": 1, "80": 2, "other": 1}
+    assert (g9["in_family"], g9["as_predicted"], g9["converged"]) == (5, 4, 3)
+    # ε against n² for n = 2, 3, 4
+    assert sorted(p["knot"] for p in study["eps_n2"]["2"]) == ["3_1", "4_1", "5_2", "6_2",
+                                                               "7_4"]
+    assert [p["knot"] for p in study["eps_n2"]["3"]] == ["8_19"]
+    assert study["eps_n2"]["4"] == []
+    # the catalogue: the paper's claims
+    cat = {r["label"]: r for r in study["catalogue"]}
+    assert (cat["n_c < 7"]["covered"], cat["n_c < 7"]["knots"]) == (7, 7)
+    assert (cat["n_c < 9"]["covered"], cat["n_c < 9"]["knots"]) == (26, 35)
+    assert cat["n_c < 7"]["paper"] == 1.0 and cat["n_c < 9"]["paper"] == 0.75
+    # as the atlas shows it
+    t = families_table(study)
+    assert [g["label"] for g in t["groups"]] == [g["label"] for g in study["groups"]]
+    assert t["groups"][1]["total"] == 6
+    assert t["groups"][1]["counts"]["ground = the family's shape"] == 4
+    assert "7_4 (other)" in t["note"] and "5_2 (80, predicted 4C)" in t["note"]
+    assert "26 of 35 (74 %, paper 75 %)" in t["note"]
+
+
+def test_json_entries_and_atlas_input(store, tmp_path):
+    recs = _records(store)
+    e = json_entry(recs[1], "bead")  # 4_1
+    assert (e["name"], e["n"], e["i"], e["crossing_number"]) == ("4_1", 2, 3, 4)
+    assert (e["shape"], e["multiplicity"], e["epsilon"], e["converged"]) == ("4C", None,
+                                                                            128.4, True)
+    assert e["families"] == ["4C", "80"] and "N = 150" in e["width"]
+    b = e["models"]["bead"]
+    assert b["replicas"] == 3 and b["ground"]["count"] == 2 and b["ground"]["converged"]
+    assert [s["name"] for s in b["metastable"]] == ["80"]
+    assert b["metastable"][0]["converged"] is None
+    assert e["models"]["tube"] == {**e["models"]["tube"], "replicas": 0, "ground": None,
+                                   "converged": False}
+    # the pages' input: the representative replica's chain for the 3D view
+    a = atlas_input(store, recs[1])
+    assert list(a["models"]) == ["bead"]  # no tube results: no tube entry
+    g = a["models"]["bead"]["ground"]
+    assert g["coords"].shape == (150, 3) and g["epsilon"] == 128.4
+    rep = store.replicas(knot="4_1", shape="4C")
+    best = min(rep, key=lambda r: r["epsilon"])
+    assert np.array_equal(g["coords"], store.coords(best["id"]))
+    from stiffknots.report.atlas import write_atlas
+
+    study = family_study({x["name"]: x["models"]["bead"]["ground"]
+                          for x in (json_entry(r, "bead") for r in recs)},
+                         model="bead", width="bead rule d = 1/√2, N = 150")
+    index = write_atlas(tmp_path / "atlas", [atlas_input(store, r) for r in recs],
+                        families=families_table(study), thumbnails=False)
+    html = index.read_text()
+    assert "Conjectured families and the ground states found" in html
+    assert (tmp_path / "atlas" / "knots" / "8_19.html").exists()
+
+
+def test_family_membership():
+    assert families_of(get_knot("3_1")) == ["n=i", "80"]
+    assert families_of(get_knot("4_1")) == ["4C", "80"]
+    assert families_of(get_knot("6_1")) == ["4C", "80"]
+    assert families_of(get_knot("8_3")) == ["4C"]
+    assert families_of(get_knot("6_3")) == ["80"]
+    assert families_of(get_knot("7_4")) == []
+    assert families_of(get_knot("8_19")) == ["n=i"]
+    assert predicted_shape(get_knot("3_1")) == ("CB", 2)
+    assert predicted_shape(get_knot("5_2")) == ("4C", None)
+    assert predicted_shape(get_knot("6_2")) == ("80", None)
+    assert predicted_shape(get_knot("7_4")) is None
+    assert len(EIGHTY_FAMILY) == 26
+    # every 80 is a two-bridge knot (module docstring of eighty_embedding)
+    assert all(get_knot(k).bridge_number == 2 for k in EIGHTY_FAMILY)
+
+
+def test_coverage_of_the_catalogue_is_the_papers():
+    rows = coverage(catalogue(10))
+    r7, r9, rall = rows
+    assert (r7["knots"], r7["covered"], r7["outside"]) == (7, 7, [])
+    assert (r9["knots"], r9["covered"]) == (35, 26)  # 74 %: the paper's "75 %"
+    assert r9["outside"] == ["7_4", "7_7", "8_4", "8_9", "8_11", "8_12", "8_13", "8_14",
+                             "8_15"]
+    assert rall["knots"] == 249 and rall["by_family"]["n=i"] == 46
+    with pytest.raises(ValueError, match="tabulated through 10"):
+        coverage(catalogue(11))
+
+
+def test_eps_n2_points_skip_missing():
+    pts = eps_n2_points([{"name": "a", "n": 2, "i": 2, "epsilon": 80.0, "class": "CB(i)"},
+                         {"name": "b", "n": 5, "i": 5, "epsilon": 500.0, "class": "CB(i)"},
+                         {"name": "c", "n": 3, "i": 3, "epsilon": None, "class": None}])
+    assert pts == {"2": [{"knot": "a", "n": 2, "i": 2, "epsilon": 80.0, "shape": "CB(i)"}],
+                   "3": [], "4": []}

@@ -1,0 +1,178 @@
+"""Tests of the sweep's plan (no cluster): budgets, models, knots, keys, what is pending, the
+problem's jobs, the starts and the convergence rule."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from stiffknots.engine.driver import replica_seeds
+from stiffknots.errors import InvalidParameter, UnknownKnotError, UserInputError
+from stiffknots.store import ReplicaKey, Store, settings_hash
+from stiffknots.sweeps import (
+    BUDGETS,
+    Model,
+    budget_of,
+    is_converged,
+    parse_models,
+    pending,
+    plan_sweep,
+    resolve_knots,
+    sweep_settings,
+)
+from stiffknots.sweeps.plan import build_jobs, sweep_starts
+
+D = 1 / math.sqrt(2)
+
+
+def test_budgets_are_documented_and_overridable():
+    assert set(BUDGETS) == {"tiny", "small", "default", "full"}
+    assert (BUDGETS["small"].replicas, BUDGETS["small"].moves) == (2, 5_000_000)
+    assert (BUDGETS["default"].replicas, BUDGETS["default"].moves) == (4, 30_000_000)
+    assert (BUDGETS["full"].replicas, BUDGETS["full"].moves) == (8, 100_000_000)
+    b = budget_of("small", replicas=3)
+    assert (b.name, b.replicas, b.moves) == ("custom", 3, 5_000_000)
+    assert budget_of("default") is BUDGETS["default"]
+    with pytest.raises(InvalidParameter, match="budget must be one of tiny, small"):
+        budget_of("huge")
+    with pytest.raises(InvalidParameter, match="replicas"):
+        budget_of("tiny", replicas=0)
+    with pytest.raises(InvalidParameter, match="moves"):
+        budget_of("tiny", moves=10)
+
+
+def test_models_bead_rule_and_tube_width():
+    bead, tube = parse_models("bead, tube")
+    assert (bead.exclusion, tube.exclusion) == ("bead", "tube")
+    assert bead.thickness == pytest.approx(D) and tube.thickness == pytest.approx(D)
+    assert bead.beads == tube.beads == 150
+    assert bead.params().d == pytest.approx(D) and bead.params().exclusion == "bead"
+    assert tube.params().w == pytest.approx(D) and tube.params().exclusion == "tube"
+    assert "d = 1/√2, N = 150" in bead.width()["text"]
+    assert bead.width()["w_over_L"] == pytest.approx(D / 150)
+    (t,) = parse_models("tube", w=0.5)
+    assert t.thickness == 0.5 and t.params().w == 0.5 and "w = 0.5" in t.width()["text"]
+    (b,) = parse_models("bead", w=0.5)  # w is the tube's: the bead rule keeps d = 1/√2
+    assert b.thickness == pytest.approx(D)
+    assert [m.name for m in parse_models("tube,bead,tube")] == ["tube", "bead"]
+    for bad in ("soft", "", "bead,soft"):
+        with pytest.raises(InvalidParameter, match="models"):
+            parse_models(bad)
+    with pytest.raises(InvalidParameter):
+        parse_models("tube", w=1.5)
+
+
+def test_resolve_knots():
+    assert resolve_knots(max_crossings=4) == ["3_1", "4_1"]
+    assert len(resolve_knots(max_crossings=10)) == 249
+    assert resolve_knots(["10_1", "4.1", "3_1", "T(2,3)"]) == ["3_1", "4_1", "10_1"]
+    assert resolve_knots(["3_1", "5_2"], max_crossings=5) == ["3_1", "5_2"]
+    with pytest.raises(UserInputError, match="more than max_crossings"):
+        resolve_knots(["6_1"], max_crossings=5)
+    with pytest.raises(UnknownKnotError):
+        resolve_knots(["4_9"])
+    with pytest.raises(UserInputError, match="unknot"):
+        resolve_knots(["0_1"])
+    with pytest.raises(InvalidParameter, match="max_crossings"):
+        resolve_knots(max_crossings=2)
+    with pytest.raises(InvalidParameter):
+        resolve_knots()
+
+
+def test_plan_keys_known_in_advance():
+    models = parse_models("bead,tube")
+    jobs = plan_sweep(["3_1", "4_1"], models, BUDGETS["small"], seed=7)
+    assert len(jobs) == 2 * 2 * 2
+    assert len({j.key for j in jobs}) == len(jobs)
+    assert len({j.task_key for j in jobs}) == len(jobs)
+    j = jobs[0]
+    assert (j.knot, j.model.name, j.replica, j.seed) == ("3_1", "bead", 0, 7)
+    assert j.key == ReplicaKey("3_1", "bead", 150, D, 7, 0, settings_hash(j.settings))
+    # the settings: every setting that changes the result (moves, exclusion and its width)
+    s = sweep_settings(models[0], BUDGETS["small"])
+    assert s["problem"] == "anneal" and s["start"] == "braid,cage,eighty"
+    assert s["moves"] == 5_000_000 and s["params"]["exclusion"] == "bead"
+    hashes = {m.name: settings_hash(sweep_settings(m, BUDGETS["small"])) for m in models}
+    assert hashes["bead"] != hashes["tube"]
+    assert settings_hash(sweep_settings(models[0], BUDGETS["default"])) != hashes["bead"]
+    (t5,) = parse_models("tube", w=0.5)
+    assert settings_hash(sweep_settings(t5, BUDGETS["small"])) != hashes["tube"]
+    # knot-major order: all replicas of a knot's models before the next knot
+    assert [j.knot for j in jobs] == ["3_1"] * 4 + ["4_1"] * 4
+    # more replicas of the same moves reuse the first ones (replica r's seed is fixed)
+    more = plan_sweep(["3_1"], models[:1], budget_of("small", replicas=4), seed=7)
+    assert {j.key for j in jobs if j.knot == "3_1" and j.model.name == "bead"} < \
+        {j.key for j in more}
+    assert replica_seeds(7, 2) == replica_seeds(7, 4)[:2]
+
+
+def test_pending_skips_stored_keys(tmp_path):
+    (bead,) = parse_models("bead")
+    jobs = plan_sweep(["3_1", "4_1"], [bead], BUDGETS["tiny"], seed=0)
+    with Store(tmp_path / "s.db") as st:
+        assert pending(jobs, st) == jobs
+        for j in jobs[1:3]:
+            st.put({"knot": j.knot, "exclusion": "bead", "beads": 150, "thickness": D,
+                    "seed": 0, "replica": j.replica, "settings": j.settings, "epsilon": 80.0,
+                    "min_segment_distance": 0.6, "wall_seconds": 1.0},
+                   np.zeros((150, 3)))
+        # another seed and another budget are other keys
+        other = plan_sweep(["3_1"], [bead], BUDGETS["small"], seed=1)[0]
+        st.put({"knot": "3_1", "exclusion": "bead", "beads": 150, "thickness": D, "seed": 1,
+                "replica": 0, "settings": other.settings, "epsilon": 80.0,
+                "min_segment_distance": 0.6, "wall_seconds": 1.0}, np.zeros((150, 3)))
+        assert pending(jobs, st) == [jobs[0], jobs[3]]
+
+
+def test_build_jobs_are_the_problems_with_the_keys_settings():
+    (bead,) = parse_models("bead")
+    b = BUDGETS["tiny"]
+    jobs = plan_sweep(["4_1"], [bead], b, seed=3)
+    built = build_jobs("4_1", bead, b, 3, jobs[0].settings)
+    assert sorted(built) == [0, 1]
+    seeds = replica_seeds(3, 2)
+    for r, job in built.items():
+        assert job.replica == r and job.seed == seeds[r] and job.knot == "4_1"
+        assert job.settings.moves == b.moves and job.settings.params.exclusion == "bead"
+        assert job.coords.shape == (150, 3) and job.start_code
+    assert [built[r].start for r in (0, 1)] == ["braid", "cage"]
+    with pytest.raises(RuntimeError, match="differ"):
+        build_jobs("4_1", bead, b, 3, {**jobs[0].settings, "moves": 12345})
+
+
+def test_starts_per_family():
+    from stiffknots.knots.catalogue import get_knot
+
+    assert sweep_starts(get_knot("3_1"), 150, 3) == ["braid"] * 3  # n = i: no 80 start
+    assert sweep_starts(get_knot("5_2"), 150, 4) == ["braid", "cage", "eighty", "braid"]
+    assert sweep_starts(get_knot("8_19"), 150, 2) == ["braid", "braid"]
+
+
+def test_convergence_rule():
+    assert is_converged({"count": 2, "epsilon": 100.0, "eps_max": 100.9})
+    assert not is_converged({"count": 2, "epsilon": 100.0, "eps_max": 101.2})
+    assert not is_converged({"count": 1, "epsilon": 100.0, "eps_max": 100.0})
+    assert is_converged({"count": 3, "epsilon": 100.0})
+    assert not is_converged(None) and not is_converged({})
+
+
+def test_model_validation():
+    with pytest.raises(InvalidParameter):
+        Model("soft").validate()
+    with pytest.raises(InvalidParameter):
+        Model("bead", D, beads=4).validate()
+
+
+def test_unreachable_scheduler_is_a_user_error():
+    from stiffknots.sweeps.cluster import connect, scheduler_address
+
+    with pytest.raises(UserInputError, match="no Dask scheduler answers"):
+        with connect("tcp://127.0.0.1:9", timeout=2):
+            pass
+    assert scheduler_address(" tcp://10.0.0.1:8786 ") == "tcp://10.0.0.1:8786"
+    assert scheduler_address("localhost:8786") == "localhost:8786"
+    for bad in ("", "not an address", "http//x"):
+        with pytest.raises(UserInputError, match="--scheduler"):
+            scheduler_address(bad)
