@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 run: $(STAMP)  ## the main job on a small default budget
-	$(VENV)/bin/stiffknots paper --budget small --out results/paper
+	$(VENV)/bin/stiffknots paper --budget small --out results/paper --overwrite
 
 test: $(STAMP)  ## the default (fast) test suite; pytest exit 5 (no tests) fails
 	$(PY) -m pytest -m "not slow" -q

@@ -187,3 +187,25 @@ def test_json_layout(tmp_path):
     to_npz(c, tmp_path / "c.bin")  # no suffix appended
     assert from_npz(tmp_path / "c.bin").meta == {"knot": "0_1"}
     assert from_json(tmp_path / "c.json").meta == {"knot": "0_1"}
+
+
+def test_nxyz_index_catches_a_lost_or_moved_line(tmp_path):
+    """A line lost or moved inside an nxyz file is an error naming the line, not another
+    chain read silently (the index column must count up by one)."""
+    c = Chain(trefoil(30))
+    to_xyz(c, tmp_path / "t.xyz")
+    full = (tmp_path / "t.xyz").read_text().splitlines(keepends=True)
+    assert np.array_equal(from_xyz(tmp_path / "t.xyz").coords, c.coords)
+    (tmp_path / "hole.xyz").write_text("".join(full[:10] + full[11:]))
+    with pytest.raises(ChainFormatError, match=r"line 11: index 12, expected 11 .*missing"):
+        from_xyz(tmp_path / "hole.xyz")
+    (tmp_path / "swap.xyz").write_text("".join(full[:5] + [full[6], full[5]] + full[7:]))
+    with pytest.raises(ChainFormatError, match="out of order"):
+        from_xyz(tmp_path / "swap.xyz")
+    # a file that starts at index 0 (another writer) is fine, and so is a cut tail: the
+    # closure rule then assumes a closed chain and says so
+    (tmp_path / "zero.xyz").write_text("".join(f"{k} {ln.split(' ', 1)[1]}"
+                                               for k, ln in enumerate(full[:-1])))
+    assert from_xyz(tmp_path / "zero.xyz").n_beads == 30
+    (tmp_path / "cut.xyz").write_text("".join(full[:20]))
+    assert from_xyz(tmp_path / "cut.xyz").meta["closure"].startswith("assumed closed")

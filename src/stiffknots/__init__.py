@@ -35,7 +35,8 @@ _LAZY = {
     "identify": "stiffknots.knots.identify",
     "verify_knot": "stiffknots.knots.identify",
     "knot_summary": "stiffknots.knots.summary",
-    # analysis
+    # checks and analysis
+    "check": "stiffknots.checks",
     "classify": "stiffknots.analysis",
     "group_states": "stiffknots.analysis",
     "analyse_structure": "stiffknots.analysis",

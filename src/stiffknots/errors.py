@@ -14,6 +14,10 @@ Two branches matter to a caller:
 
 :class:`RunStopped` is not an error of either kind: a run that stopped on request after writing
 its checkpoint.
+
+Warnings (:class:`StiffKnotsWarning`, a ``UserWarning``) flag input that can be used but may not
+be what the user meant: :class:`ChainWarning` (a chain that is not a unit-bond chain obeying the
+bead rule, given to an analysis that assumes one).
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from typing import Any
 __all__ = [
     "ChainFormatError",
     "ChainGeometryError",
+    "ChainWarning",
     "CheckpointError",
     "EmbeddingError",
     "EnergyBookkeepingError",
@@ -30,6 +35,7 @@ __all__ = [
     "InvalidParameter",
     "RunStopped",
     "StiffKnotsError",
+    "StiffKnotsWarning",
     "TopologyChangedError",
     "UnknownKnotError",
     "UserInputError",
@@ -135,3 +141,12 @@ class RunStopped(StiffKnotsError):  # noqa: N818 (not an error: a requested stop
         self.checkpoint = checkpoint
         self.step = step
         self.n_steps = n_steps
+
+
+class StiffKnotsWarning(UserWarning):
+    """Base class of the warnings stiffknots issues on purpose."""
+
+
+class ChainWarning(StiffKnotsWarning):
+    """A chain that is not what an analysis assumes: bonds not of unit length, or beads closer
+    than the bead rule allows (:func:`stiffknots.checks.check` says which)."""

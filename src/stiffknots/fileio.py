@@ -19,6 +19,17 @@ from stiffknots._json import dumps
 __all__ = ["atomic_path", "write_bytes", "write_json", "write_text"]
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+#: the permissions of a new file (what ``open(path, "w")`` would give): a temporary file is
+#: created private (0600) and would keep that mode through the rename
+_FILE_MODE = 0o666 & ~_umask()
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path next to ``path``; on success it replaces ``path`` in one rename.
@@ -28,8 +39,10 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
     tmp = Path(tmp)
+    with contextlib.suppress(OSError):
+        os.fchmod(fd, _FILE_MODE)
+    os.close(fd)
     try:
         yield tmp
         os.replace(tmp, path)

@@ -260,6 +260,7 @@ def from_text(path: PathLike, closed: bool | None = None, meta: dict | None = No
         lines = lines[1:]
     rows: list[list[float]] = []
     linenos: list[int] = []
+    index: list[int] = []
     for lineno, ln in lines:
         tok = cells(ln)
         if tok in (["X"], ["END"]):
@@ -281,7 +282,7 @@ def from_text(path: PathLike, closed: bool | None = None, meta: dict | None = No
         pick = cols if cols is not None else (ncol - 3, ncol - 2, ncol - 1)
         try:
             if cols is None and ncol == 4 and _is_number(tok[0]):
-                int(tok[0])  # an index column must hold integers
+                index.append(int(tok[0]))  # an index column must hold integers
             rows.append([float(tok[i]) for i in pick])
         except ValueError:
             raise ChainFormatError(f"{path}, line {lineno}: {ln!r} is not numeric") from None
@@ -296,7 +297,21 @@ def from_text(path: PathLike, closed: bool | None = None, meta: dict | None = No
     if not rows:
         raise ChainFormatError(f"{path}: no vertex lines")
     x = np.array(rows, dtype=np.float64)
+    if len(index) == len(rows):
+        _check_index(path, index, linenos, bool(len(x) >= 2 and np.array_equal(x[0], x[-1])))
     return _closed_chain(x, closed, None, "", path, meta, linenos)
+
+
+def _check_index(path: PathLike, index: list[int], linenos: list[int], repeated: bool) -> None:
+    """An index column (topoly's nxyz) counts up by one from its first value; a closing line
+    repeats the first index. A line lost or moved inside the file would otherwise go unseen:
+    the chain would read as another one."""
+    body = index[:-1] if repeated and len(index) >= 2 and index[-1] == index[0] else index
+    for k, i in enumerate(body):
+        if i != body[0] + k:
+            raise ChainFormatError(
+                f"{path}, line {linenos[k]}: index {i}, expected {body[0] + k} (the index "
+                "column must count up by one: a line is missing or out of order)")
 
 
 def _is_number(s: str) -> bool:

@@ -15,8 +15,11 @@ from numba import njit
 
 from stiffknots.geometry import seg_dist2
 
-__all__ = ["bending_energy", "min_bead_distance", "min_segment_distance", "vertex_terms",
-           "writhe"]
+__all__ = ["BEAD_D", "bending_energy", "chain_report", "min_bead_distance",
+           "min_segment_distance", "vertex_terms", "writhe"]
+
+#: the paper's bead rule (§VII): beads at index distance ≥ 2 no closer than 1/√2
+BEAD_D = 1.0 / math.sqrt(2.0)
 
 
 @njit(cache=True)
@@ -193,3 +196,51 @@ def min_segment_distance(coords, closed):
     return math.sqrt(best)
 
 
+
+
+def chain_report(coords: np.ndarray, closed: bool, d: float = BEAD_D, bond_tol: float = 1e-6,
+                 segments: bool = True, unit: float | None = 1.0) -> dict:
+    """A chain against the model of the package: unit bonds and the bead rule.
+
+    Parameters
+    ----------
+    coords : (N, 3) float64 array; closed : whether bead N−1 is bonded to bead 0.
+    d : the bead rule's distance (beads at index distance ≥ 2 no closer than ``d``).
+    bond_tol : largest allowed |bond/unit − 1|.
+    segments : also measure the smallest distance between segments sharing no bead.
+    unit : the bond length expected (1); None: the mean bond, i.e. the bonds must be equal (a
+        chain in other units, with ``d`` in the same units).
+
+    Returns
+    -------
+    dict with ``n_beads``, ``closed``, ``bond_min``, ``bond_max``, ``max_bond_error``,
+    ``worst_bond`` (index of the bond farthest from 1), ``min_bead_distance`` (index distance
+    ≥ 2), ``min_segment_distance`` (None unless ``segments``), ``d``, ``bond_tol``,
+    ``unit_bonds``, ``bead_rule`` and ``problems`` (one sentence per failed check; empty when
+    the chain is a unit-bond chain obeying the bead rule).
+    """
+    x = np.ascontiguousarray(coords, dtype=np.float64)
+    b = np.roll(x, -1, axis=0) - x if closed else np.diff(x, axis=0)
+    bonds = np.sqrt((b * b).sum(axis=1))
+    u = float(bonds.mean()) if unit is None and len(bonds) else float(unit or 1.0)
+    err = np.abs(bonds / u - 1.0)
+    worst = int(np.argmax(err)) if len(err) else 0
+    max_err = float(err[worst]) if len(err) else 0.0
+    dmin = float(min_bead_distance(x, closed, 2))
+    seg = float(min_segment_distance(x, closed)) if segments else None
+    ok_bonds = max_err <= bond_tol
+    rule = not dmin < d * (1.0 - 1e-9)
+    problems = []
+    if not ok_bonds:
+        what = (f"unit bonds: |b − 1| ≤ {bond_tol:g}" if unit is not None else
+                f"equal bonds: |b/b̄ − 1| ≤ {bond_tol:g}, mean b̄ = {u:.6g}")
+        problems.append(f"bond {worst} has length {bonds[worst]:.6g} ({what})")
+    if not rule:
+        problems.append(f"two beads at index distance ≥ 2 are {dmin:.6g} apart (the bead rule "
+                        f"needs ≥ {d:.6g})")
+    return {"n_beads": len(x), "closed": bool(closed),
+            "bond_min": float(bonds.min()) if len(bonds) else None,
+            "bond_max": float(bonds.max()) if len(bonds) else None,
+            "max_bond_error": max_err, "worst_bond": worst, "min_bead_distance": dmin,
+            "min_segment_distance": seg, "d": float(d), "bond_tol": float(bond_tol),
+            "unit_bonds": bool(ok_bonds), "bead_rule": bool(rule), "problems": problems}

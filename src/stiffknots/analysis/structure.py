@@ -41,6 +41,8 @@ shrinks with ``w``; on the paper's ``N = 150`` chains the point-braids span 5 to
 from __future__ import annotations
 
 import math
+import sys
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -54,6 +56,8 @@ from stiffknots.analysis.contacts import (
     as_coords,
     contact_map,
 )
+from stiffknots.errors import ChainWarning
+from stiffknots.measures import chain_report
 
 __all__ = [
     "DEFAULT_TANGENT_ANGLE",
@@ -73,6 +77,27 @@ __all__ = [
 
 #: Largest angle (degrees) between the strands of a point-braid; wider contacts are crossings.
 DEFAULT_TANGENT_ANGLE = 35.0
+
+#: Bonds within this fraction of their mean count as equal for the analysis (its contacts and
+#: lengths do not notice less; chains resampled to unit chords, as in :mod:`.synthetic`, stay
+#: within 1e-3). The mean is the unit: the analysis is scale-free when ``d`` scales alike.
+ANALYSIS_BOND_TOL = 1e-2
+
+
+def warn_unless_model_chain(x: np.ndarray, closed: bool, d: float) -> None:
+    """Warn (:class:`~stiffknots.errors.ChainWarning`, at the caller's line outside the
+    package) when ``x`` is not a chain of unit (equal) bonds obeying the bead rule at ``d``:
+    the analysis assumes one, and on another chain its contacts, braids and shape class mean
+    little."""
+    rep = chain_report(x, closed, d=d, bond_tol=ANALYSIS_BOND_TOL, segments=False, unit=None)
+    if not rep["problems"]:
+        return
+    level, f = 2, sys._getframe(1)  # stacklevel 2: the caller of this function
+    while f is not None and str(f.f_globals.get("__name__", "")).startswith("stiffknots."):
+        f, level = f.f_back, level + 1
+    warnings.warn("the shape analysis assumes a unit-bond chain obeying the bead rule; in this "
+                  "one " + "; ".join(rep["problems"]) + " (stiffknots.checks.check reports "
+                  "the chain)", ChainWarning, stacklevel=level)
 
 
 # --------------------------------------------------------------------------------------------
@@ -596,9 +621,16 @@ def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
     Returns
     -------
     Structure
+
+    Warns
+    -----
+    ChainWarning
+        If the chain is not a unit-bond chain obeying the bead rule at ``d`` (bonds within
+        ``ANALYSIS_BOND_TOL`` of 1); :func:`stiffknots.checks.check` reports it in full.
     """
     x = as_coords(coords, closed)
     cmap = contact_map(x, closed, d=d, factor=factor, cutoff=cutoff, min_sep=min_sep)
+    warn_unless_model_chain(x, closed, float(d))
     bonds = _bond_lengths(x, closed)
     total = float(bonds.sum())
     if min_length is None:

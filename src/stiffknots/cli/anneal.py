@@ -18,6 +18,7 @@ from stiffknots.cli.app import (
     PolishOpt,
     ReplicaProgress,
     ReplicasOpt,
+    ResultsFolder,
     ResumeOpt,
     SeedOpt,
     StartOpt,
@@ -25,33 +26,36 @@ from stiffknots.cli.app import (
     check_interrupted,
     choice,
     claim_checkpoint,
+    count,
     dump,
     finish,
     fmt,
     out,
     prepare_out,
+    tube_only,
     width_of,
-    write_manifest,
 )
 
 
 def save_results(res, out_dir: Path, title: str, command: str) -> dict:
-    """``res.save`` plus a picture of the best chain and the manifest (written last)."""
+    """``res.save`` plus a picture of the best chain, the manifest written last; on Ctrl-C or
+    an error none of it stays (:class:`ResultsFolder`)."""
     from stiffknots.report.render import save_chain_png
 
-    paths = res.save(out_dir)
-    png = save_chain_png(res.best.coords, out_dir / "best.png", closed=res.closed, title=title)
-    files = {k: str(v) for k, v in paths.items()} | {"png": str(png)}
-    write_manifest(out_dir, files, command)
-    return files
+    with ResultsFolder(out_dir, command):
+        paths = res.save(out_dir)
+        png = save_chain_png(res.best.coords, out_dir / "best.png", closed=res.closed,
+                             title=title)
+    return {k: str(v) for k, v in paths.items()} | {"png": str(png)}
 
 
 def anneal(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
-    beads: Annotated[int, typer.Option(help="Number of beads N (bond length 1).")] = 150,
+    beads: Annotated[int, typer.Option(help="Number of beads N (bond length 1).",
+                                       parser=count)] = 150,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica (default: 30,000,000 at N = 150, scaled as N²)."
-    )] = None,
+        help="Attempted moves per replica (default: 30,000,000 at N = 150, scaled as N²; "
+             "3e7 works too).", parser=count)] = None,
     replicas: ReplicasOpt = 2,
     rounds: Annotated[int, typer.Option(
         help="Most rounds of --replicas replicas: after each round the run stops if the "
@@ -91,12 +95,21 @@ def anneal(
     from stiffknots.engine.params import MoveParams
     from stiffknots.engine.schedules import SCHEDULES, Schedule
     from stiffknots.knots.starts import STARTS
+    from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
     from stiffknots.problems.closed import ClosedAnneal
 
+    beads, replicas, seed = V.beads(beads), V.replicas(replicas), V.seed(seed)
+    if moves is not None:
+        moves = V.moves(moves)
+    rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)
     choice("--start", start, ("all", *STARTS))
     choice("--exclusion", exclusion, ("bead", "tube"))
     choice("--schedule", schedule, SCHEDULES)
+    tube_only(w, exclusion)
+    if schedule == "tempering" and relax_fraction is not None:
+        raise UserError("--relax-fraction applies to the power and geometric schedules "
+                        "(tempering has no relaxation stage)")
     given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
     sch = replace(Schedule().for_beads(beads), kind=schedule,
                   **{k: v for k, v in given.items() if v is not None})
@@ -123,7 +136,7 @@ def anneal(
                            polish=polish)
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
                          disable=json_) as bars:
-        res = solve(problem, on_replica_done=bars.done, on_progress=bars)
+        res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None
     check_interrupted(res, hint)
     width = width_of(params, beads)

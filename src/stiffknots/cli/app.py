@@ -4,11 +4,14 @@ JSON output, the results folder, checkpoint folders, live progress and interrupt
 from __future__ import annotations
 
 import contextlib
+import errno
+import fnmatch
 import json
 import math
 import os
 import shutil
 import sys
+from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Annotated
 
@@ -30,9 +33,28 @@ app = typer.Typer(
 out = Console()
 err = Console(stderr=True)
 
+def count(text: str) -> int | float:
+    """Parser of a count option (``--moves 2e7``, ``--beads 1_000``): an integer written in any
+    of Python's ways or in scientific notation. A number that is not an integer is returned as
+    it is, so that the range check names the option and its limits; text that is no number is
+    a usage error (one line, exit 2)."""
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        d = Decimal(text.strip().replace("_", ""))
+    except InvalidOperation:
+        raise typer.BadParameter(f"{text!r} is not a number") from None
+    if d.is_finite() and d == d.to_integral_value():
+        return int(d)
+    return float(d)
+
+
 # -- options shared by several commands ---------------------------------------------------------
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print a JSON object for scripts.")]
-ReplicasOpt = Annotated[int, typer.Option(help="Independent replicas (run on all cores).")]
+ReplicasOpt = Annotated[int, typer.Option(help="Independent replicas (run on all cores).",
+                                          parser=count)]
 SeedOpt = Annotated[int, typer.Option(help="Seed (replica seeds derive from it).")]
 OutOpt = Annotated[str | None, typer.Option(
     "--out", help="Write the results into this folder (refused if it holds another run's "
@@ -53,6 +75,11 @@ ResumeOpt = Annotated[bool, typer.Option(
 
 MANIFEST = "manifest.json"
 RESULT_FILES = ("manifest.json", "result.json", "summary.json", "report.md")
+#: what a run writes into its folder: a folder holding any of these (without a manifest: a run
+#: killed while writing, maybe in the middle of a temporary file) holds another run's files;
+#: ``--overwrite`` removes them
+RUN_FILES = (*RESULT_FILES, "report.html", "best.xyz", "best.json", "best.png", "traces.npz",
+             "replica_*.xyz", "tension.png", "Le_*", "F_*", ".*.tmp")
 
 
 class UserError(UserInputError):
@@ -90,6 +117,13 @@ def floats(text: str, what: str) -> list[float]:
     return vals
 
 
+def tube_only(w: float | None, exclusion: str) -> None:
+    """``--w`` is the tube's diameter: given with the bead rule it would be ignored."""
+    if w is not None and exclusion != "tube":
+        raise UserError("--w applies to --exclusion tube only (the bead rule's distance is "
+                        "d = 1/√2); add --exclusion tube or drop --w")
+
+
 def choice(option: str, value: str, allowed) -> str:
     if value not in allowed:
         raise UserError(f"{option} must be one of {', '.join(allowed)}, got {value!r}")
@@ -97,6 +131,15 @@ def choice(option: str, value: str, allowed) -> str:
 
 
 # -- the results folder -------------------------------------------------------------------------
+#
+# A results folder is checked, created and locked before any work (prepare_out). The run writes
+# into it inside ResultsFolder: each file atomically, manifest.json last, so a folder with a
+# manifest holds a complete set; on Ctrl-C or an error the files of the run are removed again.
+# A folder this process created and left empty is removed when the command fails
+# (release_folders, called by main).
+
+_CREATED: list[Path] = []  # folders created by this process, deepest first
+_LOCKED: dict[str, int] = {}  # real path → open descriptor of a folder locked by this process
 
 
 def _writable_folder(path: str | Path, option: str) -> Path:
@@ -104,55 +147,136 @@ def _writable_folder(path: str | Path, option: str) -> Path:
     if str(path).strip() == "":
         raise UserError(f"{option} must name a folder, got ''")
     path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise UserError(f"{option} {path}: exists and is not a folder")
+    missing: list[Path] = []
     try:
+        if path.exists() and not path.is_dir():
+            raise UserError(f"{option} {path}: exists and is not a folder")
+        missing = [p for p in (path, *path.parents) if not p.exists()]
         path.mkdir(parents=True, exist_ok=True)
         probe = path / f".stiffknots-probe-{os.getpid()}"
         probe.write_bytes(b"")
         probe.unlink()
     except OSError as exc:
+        _remove_empty(missing)
         raise UserError(f"{option} {path}: cannot write there "
                         f"({exc.strerror or type(exc).__name__})") from None
+    _CREATED.extend(missing)
+    return path
+
+
+def _remove_empty(folders) -> None:
+    for p in folders:  # deepest first
+        with contextlib.suppress(OSError):
+            p.rmdir()
+
+
+def release_folders() -> None:
+    """Remove the folders this process created and left empty (after a failed command)."""
+    _remove_empty(_CREATED)
+    _CREATED.clear()
+
+
+def _lock(path: Path, option: str) -> None:
+    """Lock the folder ``path`` until this process ends: a second run that claims it gets one
+    line and exit code 2. Where the file system cannot lock, the run goes on without."""
+    import fcntl
+
+    key = os.path.realpath(path)
+    if key in _LOCKED:
+        return  # --out and --checkpoint may be the same folder
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)  # not inherited by the workers
+    except OSError:
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as exc:
+        os.close(fd)
+        if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+            raise UserError(f"{option} {path} is in use by another run") from None
+        return
+    _LOCKED[key] = fd
+
+
+def prepare_folder(path: str | Path | None, option: str = "--out") -> Path | None:
+    """Check (and create) a folder that a command writes a file into (``elastica --out``)."""
+    return None if path is None else _writable_folder(path, option)
+
+
+def prepare_file(path: str | Path | None, option: str) -> Path | None:
+    """Check before any work that a file can be written at ``path`` (``resample DEST``,
+    ``atlas --db``): not '', not a folder, its folder creatable and writable (created now,
+    removed again if the command fails)."""
+    if path is None:
+        return None
+    if str(path).strip() == "":
+        raise UserError(f"{option} must name a file, got ''")
+    path = Path(path)
+    if path.is_dir():
+        raise UserError(f"{option} {path} is a folder; give the path of a file")
+    try:
+        _writable_folder(path.parent, option)
+    except UserError as exc:
+        why = str(exc).rsplit("(", 1)[-1] if str(exc).endswith(")") else "not a folder)"
+        raise UserError(f"{option} {path}: cannot write there ({why}") from None
     return path
 
 
 def prepare_out(path: str | Path | None, overwrite: bool = False, option: str = "--out"
                 ) -> Path | None:
-    """Check ``--out`` before any work (exit 2 if it cannot be written, or if it holds another
-    run's results and ``overwrite`` is off); with ``overwrite``, remove the files the earlier
-    run listed in its manifest."""
+    """Check ``--out`` before any work and claim it: exit 2 if it cannot be written, if another
+    run is writing there, or if it holds another run's files and ``overwrite`` is off; with
+    ``overwrite``, remove what the earlier run wrote."""
     if path is None:
         return None
     path = _writable_folder(path, option)
-    old = [n for n in RESULT_FILES if (path / n).exists()]
+    _lock(path, option)
+    old = _run_files(path)
     if old and not overwrite:
-        raise UserError(f"{option} {path} holds the results of another run ({old[0]}); "
-                        "choose another folder or add --overwrite")
+        what = ("the results of another run" if (path / MANIFEST).exists()
+                else "the files of an unfinished run (no manifest.json)")
+        raise UserError(f"{option} {path} holds {what} ({old[0]}); choose another folder "
+                        "or add --overwrite")
     if old:
         _remove_previous(path)
     return path
 
 
+def _run_files(path: Path) -> list[str]:
+    """The names in ``path`` that a run writes (the manifest first)."""
+    try:
+        names = sorted(os.listdir(path), key=lambda n: (n != MANIFEST, n))
+    except OSError:
+        return []
+    return [n for n in names if any(fnmatch.fnmatchcase(n, pat) for pat in RUN_FILES)]
+
+
+def _remove(p: Path) -> None:
+    with contextlib.suppress(OSError):
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p)
+        else:
+            p.unlink()
+
+
 def _remove_previous(path: Path) -> None:
-    """Delete what an earlier run wrote into ``path`` (its manifest lists it)."""
+    """Delete what an earlier run wrote into ``path``: the files its manifest lists and the
+    names a run writes (a run killed while writing left no manifest)."""
     names: list[str] = []
     with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):
-        names = list(json.loads((path / MANIFEST).read_text()).get("files", []))
-    for name in [*names, *RESULT_FILES]:
+        names = [str(n) for n in json.loads((path / MANIFEST).read_text()).get("files", [])]
+    root = path.resolve()
+    for name in [*names, *_run_files(path)]:
         p = (path / name).resolve()
-        if path.resolve() not in p.parents:
+        if root not in p.parents:
             continue  # never outside the folder
-        with contextlib.suppress(OSError):
-            if p.is_dir():
-                shutil.rmtree(p)
-            else:
-                p.unlink()
+        _remove(p)
+        _remove_empty([q for q in p.parents if root in q.parents])  # emptied sub-folders
 
 
-def write_manifest(path: Path, files: dict, command: str) -> None:
+def write_manifest(path: Path, files, command: str) -> None:
     """List the files a run wrote into ``path`` (written last: a folder with a manifest holds
-    a complete set of results)."""
+    a complete set of results). ``files``: paths, or nested dicts/lists of them."""
     from stiffknots._version import __version__
 
     rel = sorted({os.path.relpath(str(v), path) for v in _flat(files)})
@@ -167,9 +291,47 @@ def _flat(files) -> list:
     return [files]
 
 
-# -- checkpoint folders -------------------------------------------------------------------------
+class ResultsFolder:
+    """Write a run's results into a folder claimed by :func:`prepare_out`.
 
-_LOCKS: list = []  # open lock files, held while the process runs
+    On success the manifest, written last, lists every file the run added; on Ctrl-C or an
+    error every file and folder the run added is removed again, so that the folder never holds
+    part of a set (``kill -9`` cannot be caught: each file is still complete, being written
+    atomically, and the missing manifest marks the set unfinished). Ctrl-C then raises
+    :class:`Interrupted` saying so.
+    """
+
+    def __init__(self, path: Path | None, command: str, doing: str = "writing the results"):
+        self.path, self.command, self.doing = path, command, doing
+        self.before: set[str] = set()
+
+    def _names(self) -> set[str]:
+        return {n for n in os.listdir(self.path) if not n.startswith(".")}
+
+    def __enter__(self):
+        if self.path is not None:
+            self.before = self._names()
+        return self
+
+    def __exit__(self, kind, exc, tb):
+        if self.path is None:
+            return False
+        new = sorted(self._names() - self.before)
+        if kind is None:
+            files = [q for n in new for q in ([self.path / n] if not (self.path / n).is_dir()
+                                              else sorted(self.path.joinpath(n).rglob("*")))
+                     if not q.is_dir()]
+            write_manifest(self.path, files, self.command)
+            return False
+        for n in new:
+            _remove(self.path / n)
+        if issubclass(kind, KeyboardInterrupt):
+            raise Interrupted(f"interrupted while {self.doing}; the files of this run were "
+                              f"removed from {self.path}") from None
+        return False
+
+
+# -- checkpoint folders -------------------------------------------------------------------------
 
 
 def claim_checkpoint(path: str | Path | None, resume: bool) -> Path | None:
@@ -182,19 +344,24 @@ def claim_checkpoint(path: str | Path | None, resume: bool) -> Path | None:
     if resume and str(path).strip() and not Path(path).is_dir():
         raise UserError(f"--resume: there is no checkpoint folder {path}")
     path = _writable_folder(path, "--checkpoint")
-    import fcntl
-
-    fh = open(path / ".lock", "a+")  # noqa: SIM115 (held open until the process ends)
-    try:
-        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        fh.close()
-        raise UserError(f"--checkpoint {path} is in use by another run") from None
-    _LOCKS.append(fh)
+    _lock(path, "--checkpoint")
     return path
 
 
 # -- live progress ------------------------------------------------------------------------------
+
+_NOTES: list[str] = []  # said once, when the work starts
+
+
+def work_starts_note(text: str | None = None) -> None:
+    """With ``text``: keep a note to say when the work starts. Without: the work starts — say
+    the kept notes (after every input was checked: a mistake stays a single line)."""
+    if text is not None:
+        _NOTES.append(text)
+        return
+    while _NOTES:
+        err.print(_NOTES.pop(0), markup=False, highlight=False)
+
 
 
 class ReplicaProgress:
@@ -215,6 +382,7 @@ class ReplicaProgress:
                                                 best="") for r in range(replicas)}
 
     def __enter__(self):
+        work_starts_note()
         self.progress.__enter__()
         return self
 
@@ -230,10 +398,19 @@ class ReplicaProgress:
                              best=f"best {self.unit} {best:.4f}" if best is not None else "")
 
     def done(self, replica) -> None:
-        task = self.tasks.get(getattr(replica, "replica", None))
+        """A replica finished: its bar full, and a line that stays (also in a log file, where
+        the bars are not drawn)."""
+        r = getattr(replica, "replica", None)
+        task = self.tasks.get(r)
         if task is not None:
             t = self.progress.tasks[task].total or 1
             self.progress.update(task, total=t, completed=t)
+        if not self.progress.disable:
+            wall = getattr(replica, "wall_time", None)
+            self.progress.console.print(
+                f"{self.title}: replica {r} finished"
+                + (f" in {wall:.1f} s" if isinstance(wall, float) else ""),
+                markup=False, highlight=False)
 
 
 def check_interrupted(res, resume_hint: str | None = None) -> None:

@@ -3,11 +3,9 @@ write the atlas pages (:mod:`stiffknots.studies.atlas`)."""
 
 from __future__ import annotations
 
-import os
 import shlex
 import sys
 import threading
-from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -22,7 +20,17 @@ from rich.progress import (
 )
 from rich.table import Table
 
-from stiffknots.cli.app import Interrupted, JsonOpt, SeedOpt, UserError, dump, err, out
+from stiffknots.cli.app import (
+    Interrupted,
+    JsonOpt,
+    SeedOpt,
+    UserError,
+    dump,
+    err,
+    out,
+    prepare_file,
+    prepare_folder,
+)
 from stiffknots.sweeps import SweepListener
 
 
@@ -101,22 +109,6 @@ def _knot_list(text: str | None) -> list[str] | None:
     return names
 
 
-def _writable(path: Path, option: str) -> Path:
-    if str(path).strip() == "":
-        raise UserError(f"{option} must name a folder, got ''")
-    if path.exists() and not path.is_dir():
-        raise UserError(f"{option} {path}: exists and is not a folder")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        probe = path / f".stiffknots-probe-{os.getpid()}"
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as exc:
-        raise UserError(f"{option} {path}: cannot write there "
-                        f"({exc.strerror or type(exc).__name__})") from None
-    return path
-
-
 def atlas(
     max_crossings: Annotated[int | None, typer.Option(
         help="Every prime knot with 3 ≤ n_c ≤ K (3..13); with --knots, a limit on them.")
@@ -129,11 +121,11 @@ def atlas(
     budget: Annotated[str, typer.Option(
         help="Replicas × moves per knot and model: tiny (2 × 0.2 M, a smoke test), small "
              "(2 × 5 M), default (4 × 30 M) or full (8 × 100 M).")] = "default",
-    out_dir: Annotated[Path, typer.Option(
-        "--out", help="Folder of the atlas pages.")] = Path("results/atlas"),
-    db: Annotated[Path, typer.Option(
+    out_dir: Annotated[str, typer.Option(
+        "--out", help="Folder of the atlas pages.")] = "results/atlas",
+    db: Annotated[str, typer.Option(
         help="Results database: stored replicas are reused (resume), new ones added.")
-    ] = Path("results/stiffknots.db"),
+    ] = "results/stiffknots.db",
     scheduler: Annotated[str | None, typer.Option(
         help="Address of a running Dask scheduler (tcp://host:8786); default: a local "
              "cluster of one worker process per core.")] = None,
@@ -178,9 +170,8 @@ def atlas(
         scheduler = scheduler_address(scheduler)
         if workers is not None:
             raise UserError("--workers is for the local cluster; a --scheduler has its own")
-    _writable(out_dir, "--out")
-    if db.exists() and db.is_dir():
-        raise UserError(f"--db {db} is a folder; give the path of a database file")
+    db = prepare_file(db, "--db")
+    out_dir = prepare_folder(out_dir, "--out")
     command = "stiffknots " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     with SweepProgress(disable=json_) as bar:
         d = run_atlas(names, mods, bud, db=db, out=out_dir, seed=seed, scheduler=scheduler,

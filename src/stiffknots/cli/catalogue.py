@@ -4,14 +4,13 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.table import Table
 
 from stiffknots._version import __version__
-from stiffknots.cli.app import JsonOpt, UserError, dump, fmt, out
+from stiffknots.cli.app import JsonOpt, UserError, dump, fmt, out, prepare_folder
 
 
 def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T(2,3) ...")],
@@ -45,13 +44,15 @@ def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T
 
 
 def elastica(
-    out_dir: Annotated[Path | None, typer.Option("--out", help="Write elastica.png here.")] = None,
+    out_dir: Annotated[str | None, typer.Option("--out", help="Write elastica.png here.")
+                       ] = None,
     json_: JsonOpt = False,
 ) -> None:
     """The planar elastica constants of Appendix D (loop, 8, 80), checked two ways."""
     from stiffknots.report.figures import plot_elastica
     from stiffknots.theory.elastica import PAPER_VALUES, elastica_constants
 
+    folder = prepare_folder(out_dir, "--out")  # checked before any work
     c = elastica_constants("integrals")
     c2 = elastica_constants("elliptic")
     d = c.as_dict()
@@ -61,10 +62,9 @@ def elastica(
     d["cross_check"] = {k: abs(v - c2.as_dict()[k]) for k, v in c.as_dict().items()}
     d["paper"] = dict(PAPER_VALUES)
     png = None
-    if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
-        png = out_dir / "elastica.png"
-        plot_elastica(str(png))
+    if folder is not None:
+        png = folder / "elastica.png"
+        plot_elastica(str(png))  # written atomically
         d["figure"] = str(png)
     if json_:
         dump(d)

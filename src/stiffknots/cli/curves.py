@@ -118,15 +118,19 @@ def resample(
     json_: JsonOpt = False,
 ) -> None:
     """Resample a closed curve into N equal unit bonds that keep its knot type (checked)."""
+    from stiffknots.cli.app import prepare_file
     from stiffknots.formats import READ_SUFFIXES, closure_note, save
     from stiffknots.knots.resample import resample as _resample
+    from stiffknots.problems import validate as V
 
+    V.beads(beads)
     if dest.suffix.lower() not in (".xyz", ".json", ".npz", ".obj", ".vect"):
         raise UserError(f"{dest}: unknown suffix {dest.suffix!r}; use .xyz, .json, .npz, .obj "
                         "or .vect")
     if file.suffix.lower() not in READ_SUFFIXES:
         raise UserError(f"{file}: unknown suffix {file.suffix!r}; use one of "
                         f"{', '.join(READ_SUFFIXES)}")
+    prepare_file(dest, "DEST")  # checked before any work
     chain = _load(file, closed)
     if not chain.closed:
         raise UserError(f"{file}: resample needs a closed curve (a knot); it was read as open")
@@ -194,7 +198,7 @@ def relax(
                     w_over_L=w_over_l, knot=knot, polish=polish)
     out_path = prepare_out(out_dir, overwrite)
     with ReplicaProgress(f"relax {problem.knot_name}", replicas, disable=json_) as bars:
-        res = solve(problem, on_replica_done=bars.done, on_progress=bars)
+        res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     check_interrupted(res)
     width = width_of(problem.settings.params, beads)
     d = res.to_dict() | {"file": str(file), "closure": closure_note(chain), "width": width}

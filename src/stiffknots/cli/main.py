@@ -6,8 +6,8 @@ from __future__ import annotations
 import typer
 
 from stiffknots.cli import anneal, atlas, catalogue, curves, db, open, studies, tightest
-from stiffknots.cli.app import Interrupted, app, err
-from stiffknots.errors import InvalidParameter, UserInputError
+from stiffknots.cli.app import Interrupted, app, err, release_folders, work_starts_note
+from stiffknots.errors import InvalidParameter, UserInputError, WorkerError
 
 # the commands, in the order `stiffknots --help` lists them
 for _name, _command in (
@@ -36,49 +36,75 @@ def option_name(param: str) -> str:
     return OPTION_NAMES.get(param, "--" + param.replace("_", "-"))
 
 
+def _say(text: str) -> None:
+    err.print(text, highlight=False, markup=False, soft_wrap=True)
+
+
+def _usage_line(e) -> str:
+    """A click usage error (bad value, unknown option, missing argument) as one line."""
+    msg = " ".join(str(e.format_message()).split())
+    ctx = getattr(e, "ctx", None)
+    where = getattr(ctx, "command_path", None) or "stiffknots"
+    return f"error: {msg} (see {where} --help)"
+
+
 # commands that run the numba kernels: on a cold cache they say first what takes time
 _ENGINE_COMMANDS = {"anneal", "open", "tightest", "paper", "bench", "relax"}
 
 
 def _note_cold_cache() -> None:
+    """On a cold cache, an engine command says what takes the time — when its work starts
+    (:func:`~stiffknots.cli.app.work_starts_note`), so that a mistake stays one line."""
     import sys
 
     from stiffknots.studies.warmup import cache_is_cold
 
     args = [a for a in sys.argv[1:] if not a.startswith("-")]
     if args and args[0] in _ENGINE_COMMANDS and cache_is_cold():
-        err.print("first run: numba compiles the kernels once (about a minute; "
-                  "`stiffknots warmup` does it ahead) ...", markup=False, highlight=False)
+        work_starts_note("first run: numba compiles the kernels once (about a minute; "
+                         "`stiffknots warmup` does it ahead) ...")
 
 
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
     _note_cold_cache()
     try:
+        _main()
+    except SystemExit as e:
+        if e.code not in (0, None):
+            release_folders()  # a folder the failed command created and left empty
+        raise
+
+
+def _main() -> None:
+    try:
         rc = app(standalone_mode=False)
     except InvalidParameter as e:
-        err.print(f"error: {e.for_option(option_name(e.param))}", highlight=False, markup=False,
-                  soft_wrap=True)
+        _say(f"error: {e.for_option(option_name(e.param))}")
         raise SystemExit(2) from None
     except (UserInputError, ValueError) as e:
         # ValueError: parameter validation of the engine; one line whatever the width
-        err.print(f"error: {e}", highlight=False, markup=False, soft_wrap=True)
+        _say(f"error: {' '.join(str(e).split())}")
         raise SystemExit(2) from None
     except Interrupted as e:
-        err.print(str(e), highlight=False, markup=False, soft_wrap=True)
+        _say(str(e))
         raise SystemExit(130) from None
-    except typer.Abort:
-        err.print("interrupted", highlight=False, markup=False)
-        raise SystemExit(130) from None
-    except KeyboardInterrupt:
-        err.print("interrupted", highlight=False, markup=False)
+    except WorkerError as e:  # the machine's doing (out of memory, a kill), not a bug: one line
+        _say(f"error: {e}")
+        raise SystemExit(1) from None
+    except (typer.Abort, KeyboardInterrupt):
+        _say("interrupted")
         raise SystemExit(130) from None
     except Exception as e:  # click usage errors (typer vendors click: no import of it here)
         if callable(getattr(e, "show", None)) and isinstance(getattr(e, "exit_code", None), int):
-            e.show()
+            if type(e).__name__ == "NoArgsIsHelpError" or not callable(
+                    getattr(e, "format_message", None)):
+                e.show()  # `stiffknots` alone: the help
+            else:
+                _say(_usage_line(e))
             raise SystemExit(e.exit_code) from None
         raise
     if isinstance(rc, int) and rc != 0:
         if rc == 130:
-            err.print("interrupted", highlight=False, markup=False)
+            _say("interrupted")
         raise SystemExit(rc)

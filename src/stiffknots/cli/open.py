@@ -16,18 +16,20 @@ from stiffknots.cli.app import (
     OverwriteOpt,
     ReplicaProgress,
     ReplicasOpt,
+    ResultsFolder,
     SeedOpt,
     UserError,
     check_interrupted,
     choice,
+    count,
     dump,
     finish,
     floats,
     fmt,
     out,
     prepare_out,
+    tube_only,
     width_of,
-    write_manifest,
 )
 
 UNITS = "bond length b = 1, C = 1: force and tension in C/b², eps_e = E·L_e/C"
@@ -47,14 +49,16 @@ def open_knot(
              "z under the force F (energy E_d − F·Δz), L_e measured.")] = "extension",
     beads: Annotated[int | None, typer.Option(
         help="Beads N of the chain (--ensemble force only; default: the embedding with "
-             "⌈L_e/4⌉ beads added to each straight end).")] = None,
-    moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
+             "⌈L_e/4⌉ beads added to each straight end).", parser=count)] = None,
+    moves: Annotated[int, typer.Option(help="Attempted moves per replica.", parser=count)
+                     ] = 30_000_000,
     replicas: ReplicasOpt = 2,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model).")] = None,
     m_max: Annotated[int | None, typer.Option(
-        help="Largest sub-chain of a crankshaft move (default: N/2).")] = None,
+        help="Largest sub-chain of a crankshaft move (default: N/2; at most N − 4).")
+                     ] = None,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
@@ -68,18 +72,25 @@ def open_knot(
     every point.
     """
     from stiffknots.engine.params import MoveParams
+    from stiffknots.problems import validate as V
 
+    moves, replicas, seed = V.moves(moves), V.replicas(replicas), V.seed(seed)
     choice("--ensemble", ensemble, ("extension", "force"))
     choice("--exclusion", exclusion, ("bead", "tube"))
+    tube_only(w, exclusion)
     params = MoveParams(exclusion=exclusion, m_max=m_max, **({} if w is None else {"w": w}))
-    forces = floats(force, "--force") if force else []
-    les = floats(excess_length, "--excess-length") if excess_length else []
+    forces = floats(force, "--force") if force is not None else []
+    les = floats(excess_length, "--excess-length") if excess_length is not None else []
     if ensemble == "force":
         problems, follow = _force_problems(name, forces, les, beads, moves, replicas, seed,
                                            params)
     else:
         problems, follow = _extension_problems(name, les or [80.0], forces, beads, moves,
                                                replicas, seed, params)
+    n_min = min(p.beads for p in problems)
+    if m_max is not None and not 1 <= m_max <= n_min - 4:
+        raise UserError(f"--m-max must be an integer in [1, {n_min - 4}] (N − 4 for the open "
+                        f"chain of {n_min} beads), got {m_max}")
     out_dir = prepare_out(out_dir, overwrite)
     results, stopped = _run(problems, follow, replicas, json_)
     points = [_point(r) for r in results]
@@ -90,6 +101,7 @@ def open_knot(
         "bounds": res0.bounds, "points": points, "seed": seed, "moves": moves,
         "replicas": replicas, "beads": res0.beads, "params": params.as_dict(),
         "width": width_of(params, res0.beads), "version": res0.version, "units": UNITS,
+        "interrupted": stopped is not None,
     }
     if ensemble == "force":
         summary |= {k: last[k] for k in ("force", "force_balance")}
@@ -169,7 +181,7 @@ def _run(problems, follow, replicas, quiet):
 
     def one(p, label):
         with ReplicaProgress(label, replicas, disable=quiet) as bars:
-            r = solve(p, on_replica_done=bars.done, on_progress=bars)
+            r = solve(p, on_replica_done=bars.done, on_progress=bars, isolate=True)
         if not results:
             check_interrupted(r)
         if r.replicas:
@@ -209,13 +221,19 @@ def _point(r) -> dict:
 
 def _write(out_dir: Path, results, points, summary) -> dict:
     """Every result in its own sub-folder (``Le_<L_e>`` or ``F_<F>``), μ against 1/L_e² with
-    the bounds, ``summary.json``, and the manifest last."""
+    the bounds, ``summary.json``, and the manifest last (:class:`ResultsFolder`)."""
+    files = {}
+    with ResultsFolder(out_dir, "open"):
+        _write_points(out_dir, results, points, summary, files)
+    return files
+
+
+def _write_points(out_dir: Path, results, points, summary, files: dict) -> None:
     from stiffknots.fileio import write_json
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.report.figures import plot_tension, save_figure
     from stiffknots.report.render import save_chain_png
 
-    files = {}
     for r in results:
         tag = f"F_{r.force:g}" if hasattr(r, "force") else f"Le_{r.excess_length:.0f}"
         sub = out_dir / tag
@@ -230,8 +248,6 @@ def _write(out_dir: Path, results, points, summary) -> dict:
             "n": k.bridge_number, "i": k.braid_index} for p in points]
     files["tension_png"] = str(save_figure(plot_tension(pts), out_dir / "tension.png"))
     files["summary"] = str(write_json(out_dir / "summary.json", summary))
-    write_manifest(out_dir, files, "open")
-    return files
 
 
 def _table(summary, res0) -> None:

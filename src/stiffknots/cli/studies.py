@@ -2,13 +2,22 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.table import Table
 
-from stiffknots.cli.app import JsonOpt, UserError, dump, err, out
+from stiffknots.cli.app import (
+    JsonOpt,
+    OverwriteOpt,
+    ResultsFolder,
+    UserError,
+    dump,
+    err,
+    out,
+    prepare_out,
+    work_starts_note,
+)
 
 
 def bench(
@@ -17,8 +26,11 @@ def bench(
 ) -> None:
     """Benchmarks: moves per second (N = 150, 1000, 10000), ratio to plain numpy, seconds to
     reach the paper's energies (one core)."""
+    from stiffknots.problems import validate as V
     from stiffknots.studies.benchmark import run_benchmarks
 
+    V.number("seconds_budget", seconds_budget, 0, lo_open=True)
+    work_starts_note()
     d = run_benchmarks(budget=seconds_budget, log=None if json_ else err.print)
     if json_:
         dump(d)
@@ -38,17 +50,27 @@ def paper(
     budget: Annotated[str, typer.Option(
         help="tiny (seconds, smoke test), small (≤ 10 min on 2 cores) or full (paper grade)."
     )] = "small",
-    out_dir: Annotated[Path, typer.Option("--out", help="Report folder.")] = Path("results/paper"),
+    out_dir: Annotated[str, typer.Option(
+        "--out", help="Report folder (refused if it holds another run's results, unless "
+                      "--overwrite).")] = "results/paper",
     seed: Annotated[int, typer.Option(help="Seed (replica seeds derive from it).")] = 0,
+    overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
 ) -> None:
     """The paper's Monte Carlo study (§VII): 3_1, 4_1, 5_2, 6_2, 6_3 under the bead rule and
     the tube model; ground and metastable states classified; report.md + report.html."""
+    from stiffknots.problems import validate as V
     from stiffknots.studies.paper import BUDGETS, run_paper
 
     if budget not in BUDGETS:
         raise UserError(f"--budget must be one of {', '.join(BUDGETS)}, got {budget!r}")
-    d = run_paper(budget=budget, out_dir=out_dir, seed=seed, log=None if json_ else out.print)
+    V.seed(seed)
+    folder = prepare_out(out_dir, overwrite)
+    work_starts_note()
+    # the report is written as the study runs: Ctrl-C or an error removes it again
+    with ResultsFolder(folder, "paper", doing="running the study"):
+        d = run_paper(budget=budget, out_dir=folder, seed=seed,
+                      log=None if json_ else out.print)
     if json_:
         dump(d)
 

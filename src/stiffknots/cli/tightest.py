@@ -17,11 +17,13 @@ from stiffknots.cli.app import (
     StartOpt,
     check_interrupted,
     choice,
+    count,
     dump,
     finish,
     fmt,
     out,
     prepare_out,
+    tube_only,
     width_of,
 )
 
@@ -31,15 +33,17 @@ def tightest(
     max_curvature: Annotated[float | None, typer.Option(
         help="Curvature limit 1/R in 1/(your length unit): the minimal length L† is then "
              "printed in that unit too (the search itself is scale-free: L†/R).")] = None,
-    beads: Annotated[int, typer.Option(help="Resolution N (finer → thinner limit).")] = 150,
-    moves: Annotated[int, typer.Option(help="Attempted moves per replica.")] = 30_000_000,
+    beads: Annotated[int, typer.Option(help="Resolution N (finer → thinner limit).",
+                                       parser=count)] = 150,
+    moves: Annotated[int, typer.Option(help="Attempted moves per replica.", parser=count)
+                     ] = 30_000_000,
     replicas: ReplicasOpt = 2,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(
         help="tube (a thin tube regularising the thin knot, the default) or bead (the "
              "paper's rule d = 1/√2: longer knots at a given N).")] = "tube",
-    w: Annotated[float, typer.Option(help="Tube diameter in bond lengths (tube model).")
-                 ] = 0.25,
+    w: Annotated[float | None, typer.Option(
+        help="Tube diameter in bond lengths (tube model; default 0.25).")] = None,
     start: StartOpt = "all",
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
@@ -51,16 +55,19 @@ def tightest(
     from stiffknots.problems.base import solve
     from stiffknots.problems.tightest import Tightest, radius_of_turn
 
+    beads, moves = V.beads(beads), V.moves(moves)
+    replicas, seed = V.replicas(replicas), V.seed(seed)
     if max_curvature is not None:
         V.number("max_curvature", max_curvature, 0, lo_open=True)
     choice("--start", start, ("all", *STARTS))
     choice("--exclusion", exclusion, ("bead", "tube"))
+    tube_only(w, exclusion)
     problem = Tightest(name, beads, moves=moves, replicas=replicas, seed=seed,
-                       exclusion=exclusion, w=w, start=start)
+                       exclusion=exclusion, w=0.25 if w is None else w, start=start)
     out_dir = prepare_out(out_dir, overwrite)
     with ReplicaProgress(f"tightest {problem.knot_name}", replicas, disable=json_,
                          unit="power energy") as bars:
-        res = solve(problem, on_replica_done=bars.done, on_progress=bars)
+        res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     check_interrupted(res)
     width = width_of(problem.settings.params, beads)
     d = res.to_dict()

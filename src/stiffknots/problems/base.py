@@ -344,7 +344,7 @@ class Problem:
 
     def _verdict_rule(self, rounds: int, agree: int, rel_tol: float) -> None:
         """The convergence rule (:func:`verdict`), validated."""
-        self.rounds = V.integer("rounds", rounds, 1, 100)
+        self.rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)
         self.agree = V.integer("agree", agree, 1, V.MAX_REPLICAS)
         self.rel_tol = V.number("rel_tol", rel_tol, 0, 1, lo_open=True)
 
@@ -429,7 +429,8 @@ def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
 
 def solve(problem: Problem, *, workers: int | None = None,
           on_replica_done: Callable[[Replica], None] | None = None,
-          on_progress: Callable[[dict], None] | None = None) -> ReplicaSet:
+          on_progress: Callable[[dict], None] | None = None,
+          isolate: bool = False) -> ReplicaSet:
     """Run every job of ``problem`` on ``workers`` processes (default: all cores) and return
     its verified replicas, best first.
 
@@ -440,10 +441,14 @@ def solve(problem: Problem, *, workers: int | None = None,
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
-    "best"}`` (moves done and planned, current and lowest ε) from the workers.
+    "best"}`` (moves done and planned, current and lowest ε) from the workers. ``isolate``
+    runs even a single replica in a worker process, so that Ctrl-C stops it at once (the
+    command line does; :func:`~stiffknots.problems.pool.run_jobs`).
 
     Raises
     ------
+    CheckpointError
+        Before any work, if a job resumes from a corrupt checkpoint or one of another run.
     TopologyChangedError
         If a replica ends with another knot type (never expected: a bug, never a data point).
     """
@@ -460,7 +465,9 @@ def solve(problem: Problem, *, workers: int | None = None,
     converged, reason, rounds = False, "no replica finished", 0
     for rnd in range(max(1, problem.rounds)):
         jobs = problem.jobs(first=rnd * problem.replicas)
-        new, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress)
+        V.checkpoints(jobs)  # a corrupt or foreign checkpoint to resume: CheckpointError now
+        new, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress,
+                                    isolate=isolate)
         bad = [r for r in new if not r.knot_verified]
         if bad:
             raise TopologyChangedError(

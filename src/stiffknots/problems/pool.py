@@ -3,7 +3,8 @@ progress.
 
 A job is a picklable top-level function; each call returns one result. Guarantees:
 
-* **Ctrl-C** reaches the parent only (the workers ignore SIGINT): the finished results are kept,
+* **Ctrl-C** reaches the parent only (the workers ignore SIGINT, and hold it blocked from their
+  very start until they ignore it): the finished results are kept,
   the running workers are terminated at once (no traceback from a worker, no CPU left
   burning), and the caller learns that the run was interrupted.
 * **The parent killed** (``kill -9``): every worker asks the kernel to kill it when its parent
@@ -71,9 +72,30 @@ def _die_with_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True).start()
 
 
+@contextlib.contextmanager
+def _ctrl_c_held():
+    """Hold Ctrl-C back (SIGINT blocked in this thread) while worker processes are spawned.
+
+    The workers inherit the blocked signal, so that a Ctrl-C to the process group cannot reach
+    a worker before its initializer ignores it (a worker still importing printed a
+    KeyboardInterrupt traceback); a Ctrl-C meanwhile is delivered here afterwards, not lost.
+    CPython's resource tracker starts the same way.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def _worker_init(parent: int, progress_queue) -> None:
     global _PROGRESS
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+    if hasattr(signal, "pthread_sigmask"):  # blocked since the spawn (_ctrl_c_held)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     _die_with_parent(parent)
     if progress_queue is not None:
         _PROGRESS = progress_queue.put
@@ -90,8 +112,13 @@ def _drain(q, on_progress: Callable[[dict], None]) -> None:
 
 def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
              on_done: Callable[[Any], None] | None = None,
-             on_progress: Callable[[dict], None] | None = None) -> tuple[list[Any], bool]:
+             on_progress: Callable[[dict], None] | None = None,
+             isolate: bool = False) -> tuple[list[Any], bool]:
     """Run ``job(*args)`` for every ``args`` in ``arg_list`` on ``workers`` processes.
+
+    One worker (or one job) runs in this process, unless ``isolate``: then it runs in a worker
+    process too, so that Ctrl-C stops it at once — in this process a compiled kernel sees
+    Ctrl-C only when its chunk of moves ends (minutes for a large number of moves).
 
     Returns
     -------
@@ -101,7 +128,7 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
     """
     global _PROGRESS
     results: list[Any] = []
-    if workers <= 1 or len(arg_list) <= 1:
+    if not isolate and (workers <= 1 or len(arg_list) <= 1):
         _PROGRESS = on_progress
         try:
             for args in arg_list:
@@ -116,11 +143,13 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
         return results, False
     ctx = mp.get_context("spawn")
     q = ctx.Queue() if on_progress is not None else None
-    ex = ProcessPoolExecutor(max_workers=min(workers, len(arg_list)), mp_context=ctx,
+    nproc = max(1, min(workers, len(arg_list)))
+    ex = ProcessPoolExecutor(max_workers=nproc, mp_context=ctx,
                              initializer=_worker_init, initargs=(os.getpid(), q))
     interrupted = False
     try:
-        pending = {ex.submit(job, *args) for args in arg_list}
+        with _ctrl_c_held():  # the workers are spawned here, by submit
+            pending = {ex.submit(job, *args) for args in arg_list}
         while pending:
             done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
             if q is not None:

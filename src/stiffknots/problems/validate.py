@@ -23,6 +23,7 @@ MAX_REPLICAS = 1_000
 MAX_SEED = 2**63 - 1
 MIN_EXCESS_LENGTH = 8
 MAX_EXCESS_LENGTH = 10_000
+MAX_ROUNDS = 100
 
 
 def integer(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
@@ -85,3 +86,26 @@ def _describe(what: str, lo, hi, lo_open: bool = False, hi_open: bool = False,
     if hi is not None:
         return f"{what} {'<' if hi_open else '≤'} {hi:{spec}}"
     return what
+
+
+def checkpoints(jobs) -> None:
+    """Before any work: every checkpoint that a resumed job will read must be a readable
+    checkpoint of this very run.
+
+    Raises
+    ------
+    CheckpointError
+        For an empty, truncated or junk file, a folder in its place, or a checkpoint written by
+        another run (other settings, seed, replica, starting chain or version) — the error the
+        worker would raise later, raised now.
+    """
+    from stiffknots.engine.driver import check_resumable, load_checkpoint, run_meta
+
+    for job in jobs:
+        path = job.checkpoint
+        if not job.resume or path is None or not (path.exists() or path.is_symlink()):
+            continue  # nothing to resume: the job starts afresh
+        kind = "tempering" if job.settings.schedule.kind == "tempering" else "anneal"
+        _, meta = load_checkpoint(path)
+        check_resumable(meta, run_meta(kind, job.settings, job.seed, job.replica, job.coords),
+                        path)

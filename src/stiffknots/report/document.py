@@ -35,6 +35,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from urllib.parse import quote
 
+from stiffknots.fileio import write_text
+
 __all__ = ["Document", "format_cell"]
 
 _INLINE = re.compile(r"(`[^`\n]+`)|(\*\*[^*\n]+?\*\*)|(\$[^$\n]+\$)")
@@ -384,6 +386,6 @@ class Document:
         folder.mkdir(parents=True, exist_ok=True)
         md = folder / f"{stem}.md"
         ht = folder / f"{stem}.html"
-        md.write_text(self.to_markdown(base=folder), encoding="utf-8")
-        ht.write_text(self.to_html(base=folder), encoding="utf-8")
+        write_text(md, self.to_markdown(base=folder))  # atomically: never a half report
+        write_text(ht, self.to_html(base=folder))
         return {"markdown": md, "html": ht}

@@ -14,7 +14,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -22,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from stiffknots._version import __version__
+from stiffknots.fileio import write_json
 
 TWO_PI2 = 2 * np.pi**2
 BUDGETS = {
@@ -55,6 +55,13 @@ def _plot_trend(points, fit, path):
                        path)
 
 
+def _done(res):
+    """``res``, unless Ctrl-C stopped its replicas: then the study stops (KeyboardInterrupt)."""
+    if res.interrupted:
+        raise KeyboardInterrupt
+    return res
+
+
 def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", seed: int = 0,
                    log: Callable[[str], None] | None = None) -> dict:
     """Run the study on ``budget`` and write the report; returns the summary dict."""
@@ -79,8 +86,8 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
     trend = []
     for le in b["trend"]:
         params = MoveParams(exclusion="tube", w=THIN_W, m_max=min(80, le))
-        r = anneal_open("3_1", le, moves=b["trend_moves_per_le"] * le, replicas=b["replicas"],
-                        seed=seed, params=params)
+        r = _done(anneal_open("3_1", le, moves=b["trend_moves_per_le"] * le,
+                              replicas=b["replicas"], seed=seed, params=params))
         d = r.to_dict()
         trend.append({"excess_length": le, "beads": d["beads"], "eps_e": d["eps_e"],
                       "tension": d["tension"], "shape": d["shape"],
@@ -102,6 +109,8 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
     for name in SCAN_KNOTS:
         sc = tension_scan(name, b["scan"], moves=b["scan_moves"], replicas=b["replicas"],
                           seed=seed, params=MoveParams(exclusion="tube", w=SCAN_W, m_max=60))
+        for res in sc.results:
+            _done(res)
         scans[name] = sc.to_dict()
         lo, hi = sc.bounds["eps_e_lower"], sc.bounds["eps_e_upper"]
         fe = sc.fit_eps_e
@@ -117,8 +126,8 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
     # 3. restricted curvature
     tight = {}
     for name in TIGHT_KNOTS:
-        r = tightest(name, b["tight_beads"], moves=b["tight_moves"], replicas=b["replicas"],
-                     seed=seed)
+        r = _done(tightest(name, b["tight_beads"], moves=b["tight_moves"],
+                           replicas=b["replicas"], seed=seed))
         d = r.to_dict()
         d.pop("replicas")
         tight[name] = d
@@ -128,7 +137,7 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
             f"[{d['lower_bound']:.3f}, {d['upper_bound']:.3f}]")
     summary["tightest"] = tight
     summary["wall_time"] = time.perf_counter() - t0
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    write_json(out / "summary.json", summary)
 
     doc = Document("Open knots under tension and the restricted-curvature problem")
     doc.paragraph(f"stiffknots {__version__}, budget `{budget}`, seed {seed}; bond length 1, "

@@ -13,15 +13,14 @@ ground state, with its class (``other`` if it is none of the three).
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from stiffknots._json import json_default
 from stiffknots._version import __version__
+from stiffknots.fileio import write_json
 
 PAPER_KNOTS = ("3_1", "4_1", "5_2", "6_2", "6_3")
 # the Monte Carlo shapes of the paper (§VII, Fig. 6)
@@ -70,6 +69,8 @@ def _anneal_model(name, model, b, seed):
     # the budget fixes the replicas (shared among the starts): one round, no adaptive rounds
     res = anneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed, params=params,
                  start=starts, rounds=1)
+    if res.interrupted:  # Ctrl-C stopped the replicas: the study stops, not just this knot
+        raise KeyboardInterrupt
     d = params.w if model == "tube" else params.d
     items = []
     for r in res.replicas:
@@ -102,6 +103,9 @@ def _state_dict(g, items) -> dict:
 def run_paper(budget: str = "small", out_dir: str | Path = "results/paper", seed: int = 0,
               log: Callable[[str], None] | None = None) -> dict:
     """Run the paper's study on ``budget`` and write the report; returns the summary dict.
+
+    Every file is written atomically, ``summary.json`` and the report last. Ctrl-C raises
+    KeyboardInterrupt (the replicas are stopped; nothing more is written).
 
     The summary has, per knot, ``ground`` (``shape``, ``multiplicity``, ``epsilon``, …) and
     ``metastable`` (a list) for the paper's bead rule, and the same under ``tube``.
@@ -179,7 +183,7 @@ def run_paper(budget: str = "small", out_dir: str | Path = "results/paper", seed
         "hierarchy": {"order": [(lab, v) for lab, v in h.entries], "holds": h.holds},
         "knots": knots, "wall_time": time.perf_counter() - t0,
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=json_default))
+    write_json(out / "summary.json", summary)
     _write_report(out, summary)
     say(f"report: {out / 'report.md'}, {out / 'report.html'} ({summary['wall_time']:.0f} s)")
     return summary

@@ -1,0 +1,304 @@
+"""A probe of every command and option with bad input: zero, negative, NaN, inf, huge, the
+wrong type, bad paths and bad files.
+
+Every case must exit with code 2 and print exactly one non-empty line on stderr, starting
+with ``error:``, without a traceback, and write nothing: the working folder stays empty, an
+``--out``/``--checkpoint`` folder that did not exist is not left behind, one that existed is
+unchanged. Each case fails before any work, in about a second or two (the loading of the
+command line); the cases that first build a knot's chain take a few seconds more and run with
+the slow tests (``make test-all``), as does the long tail of the matrix.
+"""
+
+from __future__ import annotations
+
+import inspect
+import re
+import shlex
+import subprocess
+import sys
+import typing
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+_SCRIPT = Path(sys.executable).with_name("stiffknots")
+CLI = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "stiffknots.cli"]
+
+# (arguments, regular expression the error line must match, fast): {out} is a folder that does
+# not exist yet, {file} an existing file, {ck} a checkpoint folder holding the bad file of the
+# case (see CHECKPOINTS)
+CASES = [
+    # --- anneal ---------------------------------------------------------------------------
+    ("anneal 3_1 --beads abc", r"Invalid value for '--beads'.*not a number", True),
+    ("anneal 3_1 --beads 1.5", r"--beads must be an integer in \[8, 20,000\], got 1\.5", False),
+    ("anneal 3_1 --beads 0", r"--beads must be an integer", False),
+    ("anneal 3_1 --beads -5", r"--beads must be an integer", False),
+    ("anneal 3_1 --beads 4", r"--beads must be an integer in \[8, 20,000\]", False),
+    ("anneal 3_1 --beads 10", r"the least number of beads that works is 15", False),
+    ("anneal 3_1 --beads 200000", r"--beads must be an integer in \[8, 20,000\]", False),
+    ("anneal 3_1 --beads 10000000 --out {out}", r"--beads must be an integer in \[8, 20,000\]",
+     True),
+    ("anneal 3_1 --moves 1e23", r"--moves must be an integer in \[1,000, 1,000,000,000,000\], "
+     r"got 100000000000000000000000", True),
+    ("anneal 3_1 --moves 0", r"--moves must be an integer", False),
+    ("anneal 3_1 --moves -1", r"--moves must be an integer", False),
+    ("anneal 3_1 --moves 10", r"--moves must be an integer in \[1,000", False),
+    ("anneal 3_1 --moves nan", r"--moves must be an integer", False),
+    ("anneal 3_1 --moves lots", r"Invalid value for '--moves'", False),
+    ("anneal 3_1 --replicas 0", r"--replicas must be an integer in \[1, 1,000\]", False),
+    ("anneal 3_1 --replicas 100000", r"--replicas must be an integer in \[1, 1,000\]", False),
+    ("anneal 3_1 --seed -1", r"--seed must be an integer in \[0, ", True),
+    ("anneal 3_1 --seed 99999999999999999999999", r"--seed must be an integer", False),
+    ("anneal 3_1 --seed x", r"Invalid value for '--seed'", False),
+    ("anneal 3_1 --t-start inf", r"--t-start must be a finite number > 0, got inf", False),
+    ("anneal 3_1 --t-start nan", r"--t-start must be a finite number > 0, got nan", False),
+    ("anneal 3_1 --t-start 0", r"--t-start must be a finite number > 0", False),
+    ("anneal 3_1 --t-start -1", r"--t-start must be a finite number > 0", False),
+    ("anneal 3_1 --t-end inf", r"--t-end must be a finite number > 0", False),
+    ("anneal 3_1 --t-start 1e-7 --t-end 1e-6", r"--t-end must be below t_start", False),
+    ("anneal 3_1 --relax-fraction nan", r"--relax-fraction must be in \[0, 1\)", False),
+    ("anneal 3_1 --relax-fraction 1", r"--relax-fraction must be in \[0, 1\)", False),
+    ("anneal 3_1 --schedule tempering --relax-fraction 0.5",
+     r"--relax-fraction applies to the power and geometric schedules", False),
+    ("anneal 3_1 --delta nan", r"--delta must be a finite number in \(0, 0\.5\)", False),
+    ("anneal 3_1 --delta inf", r"--delta must be a finite number", False),
+    ("anneal 3_1 --delta 0", r"--delta must be a finite number", False),
+    ("anneal 3_1 --exclusion tube --w nan", r"--w must be a finite number in \(0, 1\)", False),
+    ("anneal 3_1 --exclusion tube --w inf", r"--w must be a finite number", False),
+    ("anneal 3_1 --exclusion tube --w 0", r"--w must be a finite number", False),
+    ("anneal 3_1 --exclusion tube --w 2", r"--w must be a finite number in \(0, 1\)", False),
+    ("anneal 3_1 --w 0.5", r"--w applies to --exclusion tube only", False),
+    ("anneal 3_1 --m-max 10000", r"--m-max must be an integer in \[1, 147\]", True),
+    ("anneal 3_1 --m-max 0", r"--m-max must be an integer in \[1, 147\]", False),
+    ("anneal 3_1 --exclusion soft", r"--exclusion must be one of bead, tube", False),
+    ("anneal 3_1 --schedule fast", r"--schedule must be one of power, geometric, tempering",
+     False),
+    ("anneal 3_1 --start box", r"--start must be one of all, braid, cage, eighty", False),
+    ("anneal 3_1 --start cage --out {out}", r"two-box rational knots", False),
+    ("anneal ''", r"empty knot name", False),
+    ("anneal nonsense_knot", r"unknown knot", False),
+    ("anneal 4_9", r"unknown knot '4_9'", False),
+    ("anneal", r"Missing argument", False),
+    ("anneal 3_1 --bogus", r"No such option: --bogus", False),
+    # --- anneal: folders --------------------------------------------------------------------
+    ("anneal 3_1 --out ''", r"--out must name a folder, got ''", True),
+    ("anneal 3_1 --out {file}", r"--out .*: exists and is not a folder", True),
+    ("anneal 3_1 --out {file}/sub", r"--out .*: cannot write there \(Not a directory\)", True),
+    ("anneal 3_1 --out /proc/x", r"--out /proc/x: cannot write there", True),
+    ("anneal 3_1 --out /sys/kernel/x", r"--out /sys/kernel/x: cannot write there", True),
+    ("anneal 3_1 --checkpoint ''", r"--checkpoint must name a folder", False),
+    ("anneal 3_1 --checkpoint {file}", r"--checkpoint .*: exists and is not a folder", False),
+    ("anneal 3_1 --checkpoint {file}/sub", r"--checkpoint .*: cannot write there", False),
+    ("anneal 3_1 --checkpoint /proc/x", r"--checkpoint /proc/x: cannot write there", False),
+    ("anneal 3_1 --checkpoint /sys/kernel/x", r"--checkpoint /sys/kernel/x: cannot write",
+     False),
+    ("anneal 3_1 --resume", r"--resume needs --checkpoint DIR", False),
+    ("anneal 3_1 --resume --checkpoint {out}", r"--resume: there is no checkpoint folder", True),
+    ("anneal 3_1 --resume --checkpoint {ck}/empty --moves 2000 --replicas 2",
+     r"corrupt checkpoint .*replica_0\.ckpt\.npz", False),
+    ("anneal 3_1 --resume --checkpoint {ck}/truncated --moves 2000 --replicas 2",
+     r"corrupt checkpoint .*replica_0\.ckpt\.npz", False),
+    ("anneal 3_1 --resume --checkpoint {ck}/junk --moves 2000 --replicas 2",
+     r"corrupt checkpoint .*replica_0\.ckpt\.npz", False),
+    ("anneal 3_1 --resume --checkpoint {ck}/folder --moves 2000 --replicas 2",
+     r"corrupt checkpoint .*replica_0\.ckpt\.npz", False),
+    # --- open -------------------------------------------------------------------------------
+    ("open 3_1 --excess-length inf", r"--excess-length must be finite numbers, got inf", True),
+    ("open 3_1 --excess-length nan", r"--excess-length must be finite numbers, got nan", False),
+    ("open 3_1 --excess-length 1e9", r"--excess-length must be an integer in \[8, 10,000\]",
+     False),
+    ("open 3_1 --excess-length 1000000", r"--excess-length must be an integer in \[8, 10,000\]",
+     False),
+    ("open 3_1 --excess-length 0", r"--excess-length must be an integer", False),
+    ("open 3_1 --excess-length -40", r"--excess-length must be an integer", False),
+    ("open 3_1 --excess-length 40.5", r"--excess-length must be an integer", False),
+    ("open 3_1 --excess-length abc", r"--excess-length must be numbers separated by commas",
+     False),
+    ("open 3_1 --excess-length ''", r"--excess-length: give at least one value", True),
+    ("open 3_1 --force nan", r"--force must be finite numbers, got nan", True),
+    ("open 3_1 --force inf", r"--force must be finite numbers, got inf", False),
+    ("open 3_1 --force 0", r"--force must be a finite number > 0", False),
+    ("open 3_1 --force -1", r"--force must be a finite number > 0", False),
+    ("open 3_1 --excess-length 40 --force 1", r"--force must be in \[1\.97e-07, 0\.308\] C/b²",
+     False),
+    ("open 3_1 --excess-length 40 --force 1e-300",
+     r"--force must be in \[1\.97e-07, 0\.308\] C/b², got 1e-300", False),
+    ("open 3_1 --ensemble force", r"--ensemble force needs --force", False),
+    ("open 3_1 --ensemble force --force 1e300", r"--force must be a finite number in \[0, 100\]",
+     False),
+    ("open 3_1 --ensemble force --force 1e-300", r"--force must be ≥ ", False),
+    ("open 3_1 --ensemble force --force 1 --beads 5", r"--beads must be an integer", False),
+    ("open 3_1 --ensemble force --force 1 --excess-length 40,60", r"one value", False),
+    ("open 3_1 --ensemble isotension", r"--ensemble must be one of extension, force", False),
+    ("open 3_1 --beads 100", r"--beads applies to --ensemble force only", False),
+    ("open 3_1 --moves 1e23", r"--moves must be an integer in \[1,000", False),
+    ("open 3_1 --replicas 0", r"--replicas must be an integer", False),
+    ("open 3_1 --seed -1", r"--seed must be an integer", False),
+    ("open 3_1 --m-max 0", r"--m-max must be an integer", False),
+    ("open 3_1 --m-max 10000", r"--m-max must be an integer in \[1, 147\]", False),
+    ("open 3_1 --w 0.1", r"--w applies to --exclusion tube only", False),
+    ("open 3_1 --exclusion tube --w nan", r"--w must be a finite number", False),
+    ("open 0_1", r"no braid word", False),
+    ("open 3_1 --out {file}/sub", r"--out .*: cannot write there", False),
+    ("open 3_1 --out /proc/x", r"--out /proc/x: cannot write there", False),
+    ("open 3_1 --out /sys/kernel/x", r"--out /sys/kernel/x: cannot write there", False),
+    ("open 3_1 --out {file}", r"exists and is not a folder", False),
+    ("open 3_1 --out ''", r"--out must name a folder", False),
+    # --- tightest ---------------------------------------------------------------------------
+    ("tightest 3_1 --max-curvature nan", r"--max-curvature must be a finite number > 0, got nan",
+     True),
+    ("tightest 3_1 --max-curvature inf", r"--max-curvature must be a finite number > 0, got inf",
+     True),
+    ("tightest 3_1 --max-curvature 0", r"--max-curvature must be a finite number > 0", False),
+    ("tightest 3_1 --max-curvature -1", r"--max-curvature must be a finite number > 0", False),
+    ("tightest 3_1 --beads 5", r"--beads must be an integer", False),
+    ("tightest 3_1 --beads 10000000", r"--beads must be an integer", False),
+    ("tightest 3_1 --moves 1e23", r"--moves must be an integer", False),
+    ("tightest 3_1 --moves 0", r"--moves must be an integer", False),
+    ("tightest 3_1 --replicas 0", r"--replicas must be an integer", False),
+    ("tightest 3_1 --seed -1", r"--seed must be an integer", False),
+    ("tightest 3_1 --w nan", r"--w must be a finite number", False),
+    ("tightest 3_1 --w inf", r"--w must be a finite number", False),
+    ("tightest 3_1 --w 0", r"--w must be a finite number", False),
+    ("tightest 3_1 --exclusion bead --w 0.5", r"--w applies to --exclusion tube only", False),
+    ("tightest 3_1 --exclusion soft", r"--exclusion must be one of", False),
+    ("tightest 3_1 --start box", r"--start must be one of", False),
+    ("tightest nonsense", r"unknown knot", False),
+    ("tightest 3_1 --out {file}", r"exists and is not a folder", False),
+    ("tightest 3_1 --out {file}/sub", r"cannot write there", True),
+    ("tightest 3_1 --out /proc/x", r"cannot write there", False),
+    ("tightest 3_1 --out /sys/kernel/x", r"cannot write there", False),
+    ("tightest 3_1 --out ''", r"--out must name a folder", False),
+    # --- elastica, paper, bench, knot, families -----------------------------------------------
+    ("elastica --out ''", r"--out must name a folder", False),
+    ("elastica --out {file}", r"exists and is not a folder", False),
+    ("elastica --out {file}/sub", r"cannot write there", True),
+    ("elastica --out /proc/x", r"cannot write there", False),
+    ("elastica --out /sys/kernel/x", r"cannot write there", False),
+    ("paper --out ''", r"--out must name a folder", False),
+    ("paper --out {file}", r"exists and is not a folder", False),
+    ("paper --out {file}/sub", r"cannot write there", False),
+    ("paper --out /proc/x", r"cannot write there", True),
+    ("paper --out /sys/kernel/x", r"cannot write there", False),
+    ("paper --budget huge", r"--budget must be one of tiny, small, full", False),
+    ("paper --seed -1 --out {out}", r"--seed must be an integer", True),
+    ("paper --seed x", r"Invalid value for '--seed'", False),
+    ("bench --seconds-budget -1", r"--seconds-budget must be a finite number > 0", True),
+    ("bench --seconds-budget 0", r"--seconds-budget must be a finite number > 0", False),
+    ("bench --seconds-budget nan", r"--seconds-budget must be a finite number > 0", False),
+    ("bench --seconds-budget inf", r"--seconds-budget must be a finite number > 0", False),
+    ("bench --seconds-budget x", r"Invalid value for '--seconds-budget'", False),
+    ("knot 4_9", r"unknown knot '4_9'", False),
+    ("knot ''", r"empty knot name", False),
+    ("knot 3_1 --bogus", r"No such option: --bogus", False),
+    ("families --max-crossings 0", r"--max-crossings must be between 3 and 13", False),
+    ("families --max-crossings 20", r"--max-crossings must be between 3 and 13", False),
+    ("families --max-crossings x", r"Invalid value for '--max-crossings'", False),
+    ("bogus-command", r"No such command 'bogus-command'", True),
+]
+
+CHECKPOINTS = {"empty": b"", "junk": b"junk, not a checkpoint\n",
+               "truncated": b"PK\x03\x04" + bytes(200)}
+
+
+def _fixtures(root: Path) -> dict[str, str]:
+    """An existing file, bad checkpoints (one folder per kind), and a folder that does not
+    exist yet; returns the placeholders."""
+    fx = root / "fixtures"
+    fx.mkdir()
+    (fx / "afile").write_text("not a folder\n")
+    for kind, data in CHECKPOINTS.items():
+        (fx / "ck" / kind).mkdir(parents=True)
+        (fx / "ck" / kind / "replica_0.ckpt.npz").write_bytes(data)
+    (fx / "ck" / "folder" / "replica_0.ckpt.npz").mkdir(parents=True)
+    return {"{file}": str(fx / "afile"), "{ck}": str(fx / "ck"), "{out}": str(root / "new" / "out")}
+
+
+def _snapshot(folder: Path) -> dict[str, bytes | None]:
+    return {str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None)
+            for p in sorted(folder.rglob("*"))}
+
+
+def _params():
+    for args, pattern, fast in CASES:
+        yield pytest.param(args, pattern, id=args[:70],
+                           marks=() if fast else pytest.mark.slow)
+
+
+@pytest.mark.parametrize(("args", "pattern"), list(_params()))
+def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, args, pattern):
+    places = _fixtures(tmp_path)
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    before = _snapshot(tmp_path / "fixtures")
+    argv = shlex.split(args)
+    for key, value in places.items():
+        argv = [a.replace(key, value) for a in argv]
+    p = subprocess.run([*CLI, *argv], cwd=cwd, capture_output=True, text=True, timeout=300)
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode == 2, (p.returncode, p.stderr[-2000:])
+    assert "Traceback" not in p.stderr
+    assert len(lines) == 1, p.stderr
+    assert lines[0].startswith("error:"), lines[0]
+    assert re.search(pattern, lines[0]), lines[0]
+    assert p.stdout == ""
+    # nothing written: the working folder is empty, a new --out is not left behind, the
+    # existing files and folders are untouched
+    assert list(cwd.iterdir()) == []
+    assert not (tmp_path / "new").exists()
+    assert _snapshot(tmp_path / "fixtures") == before
+
+
+def test_every_option_of_every_command_is_probed():
+    """Each option that takes a value appears in at least one probe case of its command (a new
+    option needs its bad values here too)."""
+    from stiffknots.cli import app
+
+    missing = []
+    for cmd in app.registered_commands:
+        name = cmd.name or cmd.callback.__name__
+        hints = typing.get_type_hints(cmd.callback, include_extras=True)
+        for pname in inspect.signature(cmd.callback).parameters:
+            ann = hints[pname]
+            opts = [m for m in getattr(ann, "__metadata__", ()) if type(m).__name__ == "OptionInfo"]
+            if not opts or typing.get_args(ann)[0] is bool:
+                continue  # an argument (probed through the knot names) or a flag
+            o = opts[0]  # typer.Option("--out", ...) keeps the name as its default
+            decls = [d for d in (*(o.param_decls or ()), o.default)
+                     if isinstance(d, str) and d.startswith("--")]
+            flag = decls[0] if decls else "--" + pname.strip("_").replace("_", "-")
+            if not any(a.split()[0] == name and flag in a.split() for a, _, _ in CASES):
+                missing.append(f"{name} {flag}")
+    assert not missing, f"options without a probe case: {missing}"
+
+
+def test_resume_check_happens_before_any_work(tmp_path, monkeypatch):
+    """validate.checkpoints: solve reads every checkpoint before the workers start."""
+    from stiffknots.errors import CheckpointError
+    from stiffknots.problems import base
+    from stiffknots.problems import validate as V
+    from stiffknots.problems.closed import ClosedAnneal
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the replicas started")
+
+    monkeypatch.setattr(base, "run_jobs", no_work)
+
+    ck = tmp_path / "ck"
+    ck.mkdir()
+    problem = ClosedAnneal("3_1", moves=2000, replicas=2, checkpoint_dir=ck, resume=True)
+    V.checkpoints(problem.jobs())  # no checkpoint yet: nothing to check, the run starts afresh
+    for data in CHECKPOINTS.values():
+        (ck / "replica_1.ckpt.npz").write_bytes(data)
+        with pytest.raises(CheckpointError, match=r"corrupt checkpoint .*replica_1\.ckpt\.npz"):
+            base.solve(problem)
+    (ck / "replica_1.ckpt.npz").unlink()
+    # a checkpoint of another run: refused before any work too
+    from stiffknots.engine.driver import run_meta, save_checkpoint
+
+    job = problem.jobs()[1]
+    meta = run_meta("anneal", job.settings, job.seed + 1, job.replica, job.coords)
+    save_checkpoint(ck / "replica_1.ckpt.npz", {"pos": np.zeros((3, 3))}, meta)
+    with pytest.raises(CheckpointError, match="different run .*seed differs"):
+        base.solve(problem)
