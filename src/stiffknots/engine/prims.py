@@ -47,9 +47,20 @@ C_ACCEPTED = 4
 C_NCNT = 6
 
 
+# multipliers of the cell hash (large odd numbers; wrapping int64 arithmetic)
+HASH_X = 73856093
+HASH_Y = 19349663
+
+
 @njit(cache=True, inline="always")
 def _hash(ix, iy, iz, mask):
-    return ((ix * 73856093) ^ (iy * 19349663) ^ (iz * 83492791)) & mask
+    """Slot of cell (ix, iy, iz) in a table of mask + 1 (a power of two) slots.
+
+    Linear in iz, so that the cells of one z column sit in consecutive slots: a scan that runs
+    z innermost reads a few cache lines instead of one per cell. Two cells may share a slot;
+    every scan tests each segment it meets by distance, so a collision costs time, never
+    correctness."""
+    return (ix * HASH_X + iy * HASH_Y + iz) & mask
 
 
 @njit(cache=True)
@@ -335,10 +346,23 @@ def _de3(o1, n1, o2, n2, o3, n3, emode, power, escale):
 
 @njit(cache=True, inline="always")
 def _boltzmann(x, s0, s1, s2, s3):
-    """Accept with probability e^{−x} (x > 0; never when x > 50). Returns (accept, state)."""
+    """Accept with probability e^{−x} (x > 0; never when x > 50). Returns (accept, state).
+
+    The decision is exactly ``u < math.exp(-x)``, but the exponential is evaluated only when
+    u falls in a narrow band: for x ≥ 0, 1 − x + x²/2 − x³/6 ≤ e^{−x} ≤ 1/(1 + x + x²/2 + x³/6)
+    (Taylor, alternating remainder resp. positive terms). Both shortcuts keep a margin of
+    1e-9, far above the rounding of the bounds (a few ulps where they are near u ∈ [0, 1))
+    and of libm's exp (< 1 ulp), so they never decide differently from the full test."""
     if x > 50.0:
         return False, s0, s1, s2, s3
     u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+    x2 = x * x
+    h = 0.5 * x2
+    t = x2 * x * (1.0 / 6.0)
+    if u < (1.0 - x) + (h - t) - 1e-9:
+        return True, s0, s1, s2, s3
+    if u * ((1.0 + x) + (h + t)) > 1.0 + 1e-9:
+        return False, s0, s1, s2, s3
     return u < math.exp(-x), s0, s1, s2, s3
 
 
