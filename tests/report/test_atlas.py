@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from atlas_support import BEAD_WIDTH, TUBE_RADIUS, synthetic_families, synthetic_knots
 
+from atlas_support import BEAD_WIDTH, TUBE_RADIUS, synthetic_families, synthetic_knots
 from stiffknots.report.atlas import family_statistics, format_width, state_mesh, write_atlas
 from stiffknots.report.render import DEFAULT_RADIUS
 from stiffknots.theory import closed_bounds

@@ -14,8 +14,8 @@ import re
 
 import numpy as np
 import pytest
-from atlas_support import chromium_context, find_chromium, synthetic_families, synthetic_knots
 
+from atlas_support import chromium_context, find_chromium, synthetic_families, synthetic_knots
 from stiffknots.report.atlas import write_atlas
 
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install "
