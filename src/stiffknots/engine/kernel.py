@@ -12,6 +12,10 @@ move (one bead rotated about the axis through its two neighbours by ±δ, δ = �
 lengths are preserved exactly (every bond either moves rigidly or joins a pivot, which lies on
 the axis), and only the bending angles at the two pivots change, so ΔE costs O(1).
 
+The paper's move (m = 1) has its own code in the loop, written for one bead: it makes the same
+draws in the same order and evaluates the same floating-point expressions as the general code
+with m = 1 (which it replaces), so the chains are those of the general code, bit for bit.
+
 Exclusion (two models)
 ----------------------
 * ``bead``  — beads at cyclic index distance ≥ 2 are never closer than ``d`` (the paper's rule,
@@ -38,11 +42,40 @@ cell list below, so the guard costs O(1) per moved bead.
 Cell list
 ---------
 Segment midpoints are kept in a spatial hash of cubic cells of side ``cell`` (linked lists,
-doubly linked for O(1) updates). A fixed segment within distance D of a moved segment has its
-midpoint within 1 + D of the moved segment's midpoint, hence within 1.5 + D of its moved end
-bead, so scanning the cells around each moved bead finds every candidate; the bead rule is
-checked from the same scan (a bead within d of a point has the midpoint of the segment it
-starts within d + 1/2). The cost per move is independent of N.
+doubly linked for O(1) updates; the hash is linear in the z index, so a z column of cells is
+contiguous in memory). A fixed segment within distance D of a moved segment has its midpoint
+within 1 + D of the moved segment's midpoint, hence within 1.5 + D of its moved end bead, so
+scanning the cells around each moved bead finds every candidate; the bead rule is checked from
+the same scan (a bead within d of a point has the midpoint of the segment it starts within
+d + 1/2). The cost per move is independent of N.
+
+A single-bead move (bead i from o to p, pivots j = i − 1 and k = i + 1) tests a fixed segment
+v ∉ {j, i} only through three tests, and each can refuse the move only if v's midpoint lies in
+a ball: the bead rule (bead v, or an open chain's last bead, within d of p) in the ball of
+radius d + 1/2 about p; segment A = (j, i) in the ball of radius 1 + D about A's new midpoint
+(the midpoint bound of :func:`~stiffknots.engine.prims._segment_blocked`, D = max(w, L));
+segment B = (i, k) likewise about B's. The cells scanned are those that overlap the bounding
+box of the three balls (radii enlarged by 1e-9 against rounding), a subset of the cube of
+side 2(1.5 + D) about p that the general loop scans. Every segment a test could refuse is
+therefore met, and the tests themselves are the general loop's, so the decision is the same.
+
+Neighbour lists (the paper's move alone)
+---------------------------------------
+When every move is the paper's single-bead move (:func:`run_single_moves`), bead i keeps a
+list of the segments v ∉ {i − 1, i} whose midpoint lay within R_list = R + δ + s of bead i
+when the lists were built (positions ``ref``); R = max(1.5 + max(w, δ), d + 1/2) + 1e-9
+contains the three balls above for any single-bead move (|p − midpoint of A or B| = 1/2 and
+L = δ·ρ ≤ δ, as ρ ≤ |i − j| = 1), and s = ``NBR_SKIN``. The lists are valid while every bead
+lies within s/2 of its place at the build: then for a move of bead i to p and a segment v
+whose midpoint m_v is within R of p now,
+|m_v(build) − ref_i| ≤ |m_v(build) − m_v| + |m_v − p| + |p − x_i| + |x_i − ref_i|
+≤ s/2 + R + δ + s/2 = R_list (a midpoint moves no farther than the farther of its beads),
+so v is in bead i's list and the list meets every segment the cell scan would refuse on.
+The kernel rebuilds all lists as soon as an accepted move takes its bead farther than s/2
+from ``ref``, and on entry when any bead (moved by any kernel, or replaced) is farther than
+s/2, or when the radius needed grew (other δ, d, w). A bead whose list does not fit in the
+reserved space is marked and scans the cell list. Lists and cell scan give the same
+decisions, hence the same chains, draw for draw.
 
 Open chains
 -----------
@@ -73,7 +106,10 @@ the three beads, so θ_max ↔ R_min = 1/(2 sin(θ_max/2)).
 The shared primitives (generator, cell list, joint energy, Metropolis rule, rotation, guard of one
 segment pair, brute-force checks) live in :mod:`stiffknots.engine.prims`; this module keeps the
 crankshaft move. All functions see arrays and numbers only (no Python objects) and allocate
-nothing in the loop.
+nothing in the loop. Inside the loop only helpers that take numbers are inlined: numba takes a
+reference (two atomic operations) on every array passed to an inlined helper, which costs
+more than a whole single-bead move; array work there is written out, or is a call that is
+rarely made (:func:`_cell_relink`, :func:`_nbr_build`).
 """
 
 from __future__ import annotations
@@ -150,14 +186,14 @@ NB_NMETA = 2
 
 @njit(cache=True, inline="always")
 def _single_limits(lmove, w, d, mode):
-    """dseg = max(w, L), (1 + dseg)², and the radius R around the moved bead's new place
-    that holds the midpoint of every fixed segment a single-bead move must test (module
-    docstring, Cell list), with a margin of 1e-9 for rounding."""
+    """(dseg = max(w, L), radius R around the moved bead's new place that holds the midpoint
+    of every fixed segment a single-bead move must test (module docstring, Cell list), with
+    a margin of 1e-9 for rounding)."""
     dseg = w if w > lmove else lmove
     r = 1.5 + dseg
     if mode == 0 and d + 0.5 > r:
         r = d + 0.5
-    return dseg, (1.0 + dseg) * (1.0 + dseg), r + 1e-9
+    return dseg, r + 1e-9
 
 
 @njit(cache=True, inline="always")
@@ -181,7 +217,7 @@ def _single_bead_blocked(mode, is_open, n, v, v1, i, k, vx, vy, vz, px, py, pz, 
 
 @njit(cache=True, inline="always")
 def _single_segments_blocked(v, jm, k, vx, vy, vz, wx, wy, wz, px, py, pz, ox, oy, oz,
-                             jx, jy, jz, kx, ky, kz, lmove, w2, lim_mid2):
+                             jx, jy, jz, kx, ky, kz, lmove, w2, dseg):
     """The moved segments A = (j, i) and B = (i, k) (new ends p, old o) against the fixed
     segment v = (v, v + 1) = (vx.., wx..), unless bonded (A: v = j − 1 = jm; B: v = k):
     :func:`stiffknots.engine.prims._segment_blocked` (tube and strand-passage guard)."""
@@ -190,12 +226,12 @@ def _single_segments_blocked(v, jm, k, vx, vy, vz, wx, wy, wz, px, py, pz, ox, o
     mvz = 0.5 * (vz + wz)
     if v != jm and _segment_blocked(jx, jy, jz, px, py, pz, jx, jy, jz, ox, oy, oz,
                                     0.5 * (jx + px), 0.5 * (jy + py), 0.5 * (jz + pz),
-                                    vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, lim_mid2, w2,
+                                    vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, dseg, w2,
                                     lmove):
         return True
     return v != k and _segment_blocked(px, py, pz, kx, ky, kz, ox, oy, oz, kx, ky, kz,
                                        0.5 * (px + kx), 0.5 * (py + ky), 0.5 * (pz + kz),
-                                       vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, lim_mid2, w2,
+                                       vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, dseg, w2,
                                        lmove)
 
 
@@ -370,7 +406,7 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
     lbx, lby, lbz = pos[n - 1, 0], pos[n - 1, 1], pos[n - 1, 2]
     # neighbour lists: radius R of _single_limits at L = δ (ρ ≤ 1), plus δ and the skin
     half_skin2 = 0.25 * NBR_SKIN * NBR_SKIN
-    nb_radius = _single_limits(delta, w, d, mode)[2] + delta + NBR_SKIN
+    nb_radius = _single_limits(delta, w, d, mode)[1] + delta + NBR_SKIN
     if single_lists:
         m_max = 1
         if not _nbr_valid(pos, ref, nb_radius, nbr_meta, 0.5 * NBR_SKIN):
@@ -404,9 +440,11 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
                     j = n - 1
             i = j + 1 if j < n - 1 else 0
             k = i + 1 if i < n - 1 else 0
-            jx, jy, jz = pos[j, 0], pos[j, 1], pos[j, 2]
-            ox, oy, oz = pos[i, 0], pos[i, 1], pos[i, 2]
-            kx, ky, kz = pos[k, 0], pos[k, 1], pos[k, 2]
+            # unsigned indices: no test for negative (wrap-around) indices in the loads
+            ju, iu, ku = np.uint64(j), np.uint64(i), np.uint64(k)
+            jx, jy, jz = pos[ju, 0], pos[ju, 1], pos[ju, 2]
+            ox, oy, oz = pos[iu, 0], pos[iu, 1], pos[iu, 2]
+            kx, ky, kz = pos[ku, 0], pos[ku, 1], pos[ku, 2]
             ex, ey, ez = kx - jx, ky - jy, kz - jz
             el = math.sqrt(ex * ex + ey * ey + ez * ez)
             if el < 1e-9:
@@ -420,10 +458,11 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
             # energy: only the bending angles at j and k change
             jm = j - 1 if j > 0 else n - 1
             kp = k + 1 if k < n - 1 else 0
-            ax, ay, az = jx - pos[jm, 0], jy - pos[jm, 1], jz - pos[jm, 2]
+            jmu, kpu = np.uint64(jm), np.uint64(kp)
+            ax, ay, az = jx - pos[jmu, 0], jy - pos[jmu, 1], jz - pos[jmu, 2]
             old1 = ax * (ox - jx) + ay * (oy - jy) + az * (oz - jz)
             new1 = ax * (px - jx) + ay * (py - jy) + az * (pz - jz)
-            bx, by, bz = pos[kp, 0] - kx, pos[kp, 1] - ky, pos[kp, 2] - kz
+            bx, by, bz = pos[kpu, 0] - kx, pos[kpu, 1] - ky, pos[kpu, 2] - kz
             old2 = (kx - ox) * bx + (ky - oy) * by + (kz - oz) * bz
             new2 = (kx - px) * bx + (ky - py) * by + (kz - pz) * bz
             if cmin > -1.0 and (_turn_blocked(cmin, old1, new1)
@@ -438,20 +477,22 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
             lmove = delta * rho  # largest displacement of any moved point
             if is_open and ((oz - zlo) + (pz - zlo) <= lmove or (zhi - oz) + (zhi - pz) <= lmove):
                 continue
-            dseg, lim_mid2, _r = _single_limits(lmove, w, d, mode)
+            dseg = _single_limits(lmove, w, d, mode)[0]
             blocked = False
-            if single_lists and row[2 * i + 1] >= 0:
-                e0 = row[2 * i]
-                for e in range(e0, e0 + row[2 * i + 1]):
-                    v = nbr[e]
+            iu2 = np.uint64(2) * iu
+            if single_lists and row[iu2 + np.uint64(1)] >= 0:
+                e0 = np.uint64(row[iu2])
+                for e in range(row[iu2 + np.uint64(1)]):
+                    v = np.int64(nbr[e0 + np.uint64(e)])
                     v1 = v + 1 if v < n - 1 else 0
-                    vx, vy, vz = pos[v, 0], pos[v, 1], pos[v, 2]
-                    wx, wy, wz = pos[v1, 0], pos[v1, 1], pos[v1, 2]
+                    vu, v1u = np.uint64(v), np.uint64(v1)
+                    vx, vy, vz = pos[vu, 0], pos[vu, 1], pos[vu, 2]
+                    wx, wy, wz = pos[v1u, 0], pos[v1u, 1], pos[v1u, 2]
                     if _single_bead_blocked(mode, is_open, n, v, v1, i, k, vx, vy, vz,
                                             px, py, pz, lbx, lby, lbz, d2) or \
                             _single_segments_blocked(v, jm, k, vx, vy, vz, wx, wy, wz,
                                                      px, py, pz, ox, oy, oz, jx, jy, jz,
-                                                     kx, ky, kz, lmove, w2, lim_mid2):
+                                                     kx, ky, kz, lmove, w2, dseg):
                         blocked = True
                         break
             else:
@@ -461,22 +502,23 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
                     for cy in range(y0, y1 + 1):
                         hxy = cx * HASH_X + cy * HASH_Y
                         for cz in range(z0, z1 + 1):
-                            v = head[(hxy + cz) & mask]
+                            v = head[np.uint64((hxy + cz) & mask)]
                             while v >= 0:
                                 if v != j and v != i:  # not a moved segment
                                     v1 = v + 1 if v < n - 1 else 0
-                                    vx, vy, vz = pos[v, 0], pos[v, 1], pos[v, 2]
-                                    wx, wy, wz = pos[v1, 0], pos[v1, 1], pos[v1, 2]
+                                    vu, v1u = np.uint64(v), np.uint64(v1)
+                                    vx, vy, vz = pos[vu, 0], pos[vu, 1], pos[vu, 2]
+                                    wx, wy, wz = pos[v1u, 0], pos[v1u, 1], pos[v1u, 2]
                                     if _single_bead_blocked(
                                             mode, is_open, n, v, v1, i, k, vx, vy, vz,
                                             px, py, pz, lbx, lby, lbz, d2) or \
                                             _single_segments_blocked(
                                                 v, jm, k, vx, vy, vz, wx, wy, wz,
                                                 px, py, pz, ox, oy, oz, jx, jy, jz,
-                                                kx, ky, kz, lmove, w2, lim_mid2):
+                                                kx, ky, kz, lmove, w2, dseg):
                                         blocked = True
                                         break
-                                v = nxt[v]
+                                v = nxt[np.uint64(v)]
                             if blocked:
                                 break
                         if blocked:
@@ -488,18 +530,18 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
             # ---- accept: bead i, and the cells of segments j = (j, i) and i = (i, k)
             a_single += 1
             de_total += de
-            pos[i, 0] = px
-            pos[i, 1] = py
-            pos[i, 2] = pz
+            pos[iu, 0] = px
+            pos[iu, 1] = py
+            pos[iu, 2] = pz
             h = _cell_of(0.5 * (jx + px), 0.5 * (jy + py), 0.5 * (jz + pz), inv, mask)
-            if h != bucket[j]:
+            if h != bucket[ju]:
                 _cell_relink(j, h, head, nxt, prv, bucket)
             h = _cell_of(0.5 * (px + kx), 0.5 * (py + ky), 0.5 * (pz + kz), inv, mask)
-            if h != bucket[i]:
+            if h != bucket[iu]:
                 _cell_relink(i, h, head, nxt, prv, bucket)
             if single_lists:
                 # every bead stays within half the skin of its place at the last build
-                dx, dy, dz = px - ref[i, 0], py - ref[i, 1], pz - ref[i, 2]
+                dx, dy, dz = px - ref[iu, 0], py - ref[iu, 1], pz - ref[iu, 2]
                 if dx * dx + dy * dy + dz * dz > half_skin2:
                     _nbr_build(pos, is_open, nb_radius, inv, mask, head, nxt, nbr, row, ref)
                     nbr_meta[NB_BUILDS] += 1
@@ -585,7 +627,6 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
         reach = 1.5 + dseg
         if mode == 0 and fpar[F_D] + 0.5 > reach:
             reach = fpar[F_D] + 0.5
-        lim_mid2 = (1.0 + dseg) * (1.0 + dseg)
         ok = True
         if is_open:
             # the closure rays beyond the clamped ends: moved beads stay inside the slab
@@ -620,8 +661,8 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
             bmy = 0.5 * (py + ky)
             bmz = 0.5 * (pz + kz)
             sa = b - 1 if b > 0 else n - 1  # index of segment A
-            # cells overlapping the cube [p - reach, p + reach]: at most 2 per axis when
-            # the cell side is ≥ reach (the usual case), exact in every case
+            # cells overlapping the cube [p - reach, p + reach] (three per axis when the
+            # cell side is ≈ reach, as by default), exact in every case
             x0, x1, y0, y1, z0, z1 = _cell_range(px, py, pz, reach, inv)
             for cx in range(x0, x1 + 1):
                 if not ok:
@@ -672,7 +713,7 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
                                     ppx, ppy, ppz, px, py, pz,
                                     opx, opy, opz, pos[b, 0], pos[b, 1], pos[b, 2],
                                     amx, amy, amz, vx, vy, vz, wx, wy, wz,
-                                    mvx, mvy, mvz, lim_mid2, w2, lmove):
+                                    mvx, mvy, mvz, dseg, w2, lmove):
                                 ok = False
                                 break
                             # segment B = (b, k) for the last moved bead
@@ -680,7 +721,7 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
                                     px, py, pz, kx, ky, kz,
                                     pos[b, 0], pos[b, 1], pos[b, 2], kx, ky, kz,
                                     bmx, bmy, bmz, vx, vy, vz, wx, wy, wz,
-                                    mvx, mvy, mvz, lim_mid2, w2, lmove):
+                                    mvx, mvy, mvz, dseg, w2, lmove):
                                 ok = False
                                 break
                             v = nxt[v]
