@@ -271,7 +271,6 @@ def _fixed_clash(pos, head, nxt, inv, mask, top, kfix, q, kinv, pax, pay, paz, p
     a fixed bead whose distance to bead q the move leaves invariant (−1: none)."""
     n = pos.shape[0]
     dseg = w if w > lmove else lmove
-    lim_mid2 = (1.0 + dseg) * (1.0 + dseg)
     reach = 1.0 + dseg
     if mode == 0 and 1.0 + d > reach:
         reach = 1.0 + d
@@ -306,7 +305,7 @@ def _fixed_clash(pos, head, nxt, inv, mask, top, kfix, q, kinv, pax, pay, paz, p
                             pax, pay, paz, pbx, pby, pbz, oax, oay, oaz, obx, oby, obz,
                             mx, my, mz, vx, vy, vz, wx, wy, wz,
                             0.5 * (vx + wx), 0.5 * (vy + wy), 0.5 * (vz + wz),
-                            lim_mid2, w2, lmove):
+                            dseg, w2, lmove):
                         return True
                     v = nxt[v]
     return False

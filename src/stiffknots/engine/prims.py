@@ -47,9 +47,20 @@ C_ACCEPTED = 4
 C_NCNT = 6
 
 
+# multipliers of the cell hash (large odd numbers; wrapping int64 arithmetic)
+HASH_X = 73856093
+HASH_Y = 19349663
+
+
 @njit(cache=True, inline="always")
 def _hash(ix, iy, iz, mask):
-    return ((ix * 73856093) ^ (iy * 19349663) ^ (iz * 83492791)) & mask
+    """Slot of cell (ix, iy, iz) in a table of mask + 1 (a power of two) slots.
+
+    Linear in iz, so that the cells of one z column sit in consecutive slots: a scan that runs
+    z innermost reads a few cache lines instead of one per cell. Two cells may share a slot;
+    every scan tests each segment it meets by distance, so a collision costs time, never
+    correctness."""
+    return (ix * HASH_X + iy * HASH_Y + iz) & mask
 
 
 @njit(cache=True)
@@ -217,15 +228,29 @@ def uniforms(rng, n):
 
 @njit(cache=True, inline="always")
 def _segment_blocked(nax, nay, naz, nbx, nby, nbz, oax, oay, oaz, obx, oby, obz,
-                     mx, my, mz, vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, lim_mid2, w2, lmove):
+                     mx, my, mz, vx, vy, vz, wx, wy, wz, mvx, mvy, mvz, dseg, w2, lmove):
     """Does a moved segment (new ends na–nb, old ends oa–ob, new midpoint m) clash with the
     fixed segment v–w (midpoint mv)? True if the new distance is below the tube diameter, or
-    if d_before + d_after ≤ L (the strand-passage guard of the module docstring)."""
+    if d_before + d_after ≤ L (the strand-passage guard of the module docstring);
+    dseg = max(w, L).
+
+    Both tests need the new distance D ≤ dseg, so two cheap lower bounds of D come first:
+    D ≥ |Δ| − 1 (Δ = mv − m; both segments have unit length), and the separating axis
+    along u = Δ/|Δ|: every point x of a segment with midpoint c and direction a has
+    |u·(x − c)| ≤ |u·a|/2, so D ≥ g/|Δ| with g = |Δ|² − (|a·Δ| + |b·Δ|)/2. When
+    g² > (dseg + 1e-9)²|Δ|² (g > 0) the full test could only say False; the margin covers
+    rounding, so the answer is the same as without the shortcut."""
     ddx = mvx - mx
     ddy = mvy - my
     ddz = mvz - mz
-    if ddx * ddx + ddy * ddy + ddz * ddz > lim_mid2:
+    dm2 = ddx * ddx + ddy * ddy + ddz * ddz
+    if dm2 > (1.0 + dseg) * (1.0 + dseg):
         return False  # too far apart for either test to fail
+    g = dm2 - 0.5 * (abs((nbx - nax) * ddx + (nby - nay) * ddy + (nbz - naz) * ddz)
+                     + abs((wx - vx) * ddx + (wy - vy) * ddy + (wz - vz) * ddz))
+    t = dseg + 1e-9
+    if g > 0.0 and g * g > t * t * dm2:
+        return False
     return _pair_blocked(nax, nay, naz, nbx, nby, nbz, vx, vy, vz, wx, wy, wz,
                          oax, oay, oaz, obx, oby, obz, vx, vy, vz, wx, wy, wz, w2, lmove)
 
@@ -334,12 +359,30 @@ def _de3(o1, n1, o2, n2, o3, n3, emode, power, escale):
 
 
 @njit(cache=True, inline="always")
+def _below_exp(u, x):
+    """u < e^{−x} for x ≥ 0, decided exactly as ``u < math.exp(-x)`` but with the exponential
+    evaluated only when u falls in a narrow band: 1 − x + x²/2 − x³/6 ≤ e^{−x} ≤
+    1/(1 + x + x²/2 + x³/6) (Taylor with alternating remainder; the series of e^x has
+    positive terms). Both shortcuts keep a margin of 1e-9, far above the rounding of the
+    bounds (a few ulps where they can be near u ∈ [0, 1)) and of libm's exp (< 1 ulp), so
+    they never decide differently from the plain test."""
+    x2 = x * x
+    h = 0.5 * x2
+    t = x2 * x * (1.0 / 6.0)
+    if u < (1.0 - x) + (h - t) - 1e-9:
+        return True
+    if u * ((1.0 + x) + (h + t)) > 1.0 + 1e-9:
+        return False
+    return u < math.exp(-x)
+
+
+@njit(cache=True, inline="always")
 def _boltzmann(x, s0, s1, s2, s3):
     """Accept with probability e^{−x} (x > 0; never when x > 50). Returns (accept, state)."""
     if x > 50.0:
         return False, s0, s1, s2, s3
     u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-    return u < math.exp(-x), s0, s1, s2, s3
+    return _below_exp(u, x), s0, s1, s2, s3
 
 
 @njit(cache=True, inline="always")

@@ -15,7 +15,7 @@ import numpy as np
 
 from stiffknots.engine import prims as K
 from stiffknots.engine.force_kernel import run_end_moves, run_slide_moves
-from stiffknots.engine.kernel import run_moves
+from stiffknots.engine.kernel import NB_NMETA, NB_RADIUS, NBR_PER_BEAD, run_moves, run_single_moves
 from stiffknots.engine.params import (
     ENERGY_MODELS,
     EXCLUSION_MODELS,
@@ -107,6 +107,11 @@ class ChainState:
         self.nxt = np.empty(n, dtype=np.int64)
         self.prv = np.empty(n, dtype=np.int64)
         self.bucket = np.empty(n, dtype=np.int64)
+        # neighbour lists of the single-bead kernel (run_single_moves), built on demand
+        self.nbr = np.empty(NBR_PER_BEAD * n, dtype=np.int32)
+        self.nbr_row = np.empty(2 * n, dtype=np.int64)
+        self.nbr_ref = np.empty((n, 3), dtype=np.float64)
+        self.nbr_meta = np.zeros(NB_NMETA, dtype=np.float64)
         self.counters = np.zeros(K.C_NCNT, dtype=np.int64)
         self.end_counters = np.zeros(K.C_NCNT, dtype=np.int64)
         self.slide_counters = np.zeros(K.C_NCNT, dtype=np.int64)
@@ -135,6 +140,7 @@ class ChainState:
             self.slide_m_max = n - 5 if e.slide_m_max is None else int(e.slide_m_max)
             rows = max(rows, e.end_m_max + 2, min(self.slide_m_max, n) + 3)
         self.newpos = np.empty((rows, 3), dtype=np.float64)
+        self.nbr_meta[NB_RADIUS] = 0.0  # rebuild the neighbour lists at the next use
         K.cell_build(self.pos, params.cell, self.head, self.nxt, self.prv, self.bucket,
                      not self.closed)
         self.energy = self.recomputed_energy()
@@ -229,11 +235,25 @@ class ChainState:
 
     # -- moves -------------------------------------------------------------------------------
 
+    @property
+    def single_only(self) -> bool:
+        """Is every crankshaft move the paper's single-bead move (m_max = 1 or p_single = 1)?"""
+        return bool(self.ipar[K.I_MMAX] < 2 or self.fpar[K.F_PSINGLE] >= 1.0)
+
     def run_crankshafts(self, n_moves: int, temperature: float) -> float:
-        """Crankshaft moves only (an open chain's ends stay fixed); returns ΔE_d."""
-        de = run_moves(self.pos, int(n_moves), float(temperature), self.ipar, self.fpar,
-                       self.head, self.nxt, self.prv, self.bucket, self.newpos, self.counters,
-                       self.rng)
+        """Crankshaft moves only (an open chain's ends stay fixed); returns ΔE_d.
+
+        Runs of the paper's move alone go to :func:`run_single_moves` (neighbour lists):
+        the same chain as :func:`run_moves` would give, faster."""
+        if self.single_only:
+            de = run_single_moves(self.pos, int(n_moves), float(temperature), self.ipar,
+                                  self.fpar, self.head, self.nxt, self.prv, self.bucket,
+                                  self.counters, self.rng, self.nbr, self.nbr_row,
+                                  self.nbr_ref, self.nbr_meta)
+        else:
+            de = run_moves(self.pos, int(n_moves), float(temperature), self.ipar, self.fpar,
+                           self.head, self.nxt, self.prv, self.bucket, self.newpos,
+                           self.counters, self.rng)
         self.energy += de
         self.total_energy += de
         return de
