@@ -176,6 +176,7 @@ def anneal(
               f"limit w/L → 0 lies below); bounds [{fmt(b['lower'])}, {fmt(b['upper'])}] "
               f"({b['attained_by']}); wall time {res.wall_time:.1f} s",
               markup=False, highlight=False)
+    out.print(f"thin limit: {res.thin_limit['note']}", markup=False, highlight=False)
     if out_dir is not None:
         out.print(f"results in {out_dir}/ (result.json, best.xyz, best.json, best.png)",
                   markup=False, highlight=False)

@@ -432,9 +432,7 @@ def finish(res, total: int | None = None, resume_hint: str | None = None) -> Non
 
 
 def width_of(params, beads: int) -> dict:
-    """The width a number was computed at: the exclusion model, its distance and w/L."""
-    if params.exclusion == "tube":
-        return {"exclusion": "tube", "w": params.w, "beads": beads, "w_over_L": params.w / beads,
-                "text": f"tube w = {params.w:g}, N = {beads} (w/L = {params.w / beads:.2g})"}
-    return {"exclusion": "bead", "d": params.d, "beads": beads, "w_over_L": params.d / beads,
-            "text": f"bead rule d = {params.d:.4g}, N = {beads} (w/L ≈ {params.d / beads:.2g})"}
+    """The width a number was computed at (:func:`stiffknots.engine.params.width_of`)."""
+    from stiffknots.engine.params import width_of as _width_of
+
+    return _width_of(params, beads)

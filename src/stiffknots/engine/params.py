@@ -138,6 +138,17 @@ class MoveParams:
         return ip, fp
 
 
+def width_of(params: MoveParams, beads: int) -> dict:
+    """The width a number was computed at: the exclusion model, its distance and w/L.
+
+    The bead rule keeps beads ≥ d apart (§VII: d = 1/√2 at N = 150): its tube is about d wide,
+    w/L ≈ d/N; the tube model's diameter is w (bond units), w/L = w/N.
+    """
+    if params.exclusion == "tube":
+        return {"exclusion": "tube", "w": params.w, "beads": beads, "w_over_L": params.w / beads,
+                "text": f"tube w = {params.w:g}, N = {beads} (w/L = {params.w / beads:.2g})"}
+    return {"exclusion": "bead", "d": params.d, "beads": beads, "w_over_L": params.d / beads,
+            "text": f"bead rule d = {params.d:.4g}, N = {beads} (w/L ≈ {params.d / beads:.2g})"}
 
 
 @dataclass(frozen=True)

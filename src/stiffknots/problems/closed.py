@@ -10,7 +10,7 @@ with exactly the result of an uninterrupted run (:mod:`stiffknots.engine.driver`
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
@@ -37,10 +37,26 @@ class AnnealResult(ReplicaSet):
     """Replicas of one closed knot, best (lowest ε) first."""
 
     problem: ClassVar[str] = "anneal"
+    #: the width of the run (:func:`stiffknots.engine.params.width_of`)
+    width: dict = field(default_factory=dict)
 
     @property
     def epsilon(self) -> float:
         return self.best.epsilon
+
+    @property
+    def thin_limit(self) -> dict:
+        """How far the best replica lies from the thin limit of its shape (w = 0, §V B):
+        :func:`stiffknots.theory.references.thin_limit_note`."""
+        from stiffknots.theory.references import thin_limit_note
+
+        ob = self.best.observables if self.replicas else {}
+        return thin_limit_note(self.best.epsilon if self.replicas else None,
+                               ob.get("label"), ob.get("multiplicity"),
+                               self.width.get("text", "a finite width"))
+
+    def physics(self) -> dict:
+        return super().physics() | {"width": self.width, "thin_limit": self.thin_limit}
 
 
 def checkpoint_path(checkpoint_dir: str | Path, replica: int) -> Path:
@@ -119,6 +135,11 @@ class ClosedAnneal(Problem):
 
     def settings_dict(self) -> dict:
         return {**self.settings.as_dict(), "start": self.starts, "polish": self.polish}
+
+    def result_fields(self, replicas) -> dict:
+        from stiffknots.engine.params import width_of
+
+        return {"width": width_of(self.settings.params, self.beads)}
 
 
 def anneal(

@@ -34,6 +34,7 @@ from stiffknots.problems.base import Job, Problem, Replica, solve, start_code
 from stiffknots.problems.open_extension import (
     DEFAULT_OPEN_MOVES,
     OpenResult,
+    default_open_params,
     excess_length_for_force,
     open_chain,
 )
@@ -155,7 +156,8 @@ class OpenForce(Problem):
                          "end_m_max": end_m_max}
         self.settings = AnnealSettings(
             moves=V.moves(moves), schedule=schedule or default_force_schedule(),
-            params=(params or MoveParams()).for_beads(self.beads), quench_fraction=quench_fraction,
+            params=(params or default_open_params()).for_beads(self.beads),
+            quench_fraction=quench_fraction,
             ensemble=Ensemble("force", force=self.force, **self.moves_kw))
         self.settings.validate()
         self.settings.params.validate(self.beads)

@@ -1,0 +1,56 @@
+"""Every prime knot through 8 crossings with `stiffknots anneal K` and its defaults.
+
+What a new user gets: for each knot the command is run exactly as typed (N = 150, bead rule,
+2 replicas per round on the two cores, up to 4 rounds until two replicas agree on the lowest
+state to 0.1 %), and its --json is read: ε of the best replica, its shape, the verdict
+(`converged` and its reason), the rounds used and the wall time. Prints one line per knot and a
+summary; writes bench/defaults_survey.json.
+
+    python bench/defaults_survey.py [KNOT ...]
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from stiffknots.knots.catalogue import catalogue
+
+
+def main(argv: list[str]) -> None:
+    knots = argv or [k.name for k in catalogue() if 3 <= k.crossing_number <= 8]
+    rows = []
+    for name in knots:
+        t0 = time.perf_counter()
+        p = subprocess.run([sys.executable, "-m", "stiffknots.cli", "anneal", name, "--json"],
+                           capture_output=True, text=True)
+        wall = time.perf_counter() - t0
+        if p.returncode != 0:
+            rows.append({"knot": name, "rc": p.returncode, "error": p.stderr.strip()[-300:],
+                         "wall_s": wall})
+            print(f"{name:6s} rc={p.returncode} {p.stderr.strip()[-200:]}", flush=True)
+            continue
+        d = json.loads(p.stdout)
+        conv = d.get("convergence") or {}
+        row = {"knot": name, "rc": 0, "epsilon": d["best"]["epsilon"],
+               "shape": d["best"].get("shape"), "converged": d.get("converged"),
+               "reason": conv.get("reason"), "rounds": d.get("rounds"),
+               "replicas": len(d.get("replicas", [])), "wall_s": round(wall, 1),
+               "width": d.get("width")}
+        rows.append(row)
+        print(f"{name:6s} ε = {row['epsilon']:9.3f}  {str(row['shape']):7s} "
+              f"converged={row['converged']!s:5s} rounds={row['rounds']} "
+              f"{row['wall_s']:6.1f} s  {row['reason']}", flush=True)
+    ok = [r for r in rows if r.get("converged")]
+    print(f"\nconverged: {len(ok)} of {len(rows)} "
+          f"({100 * len(ok) / max(1, len(rows)):.0f} %); not: "
+          f"{', '.join(r['knot'] for r in rows if not r.get('converged'))}")
+    print(f"total wall: {sum(r['wall_s'] for r in rows) / 60:.1f} min")
+    Path(__file__).with_name("defaults_survey.json").write_text(json.dumps(rows, indent=2))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
