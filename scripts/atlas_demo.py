@@ -3,6 +3,7 @@
 Usage::
 
     .venv/bin/python scripts/atlas_demo.py [OUT_DIR]     # default /tmp/atlas-demo
+    .venv/bin/python scripts/atlas_demo.py --existing results/atlas [KNOT]   # a real atlas
 
 Writes ``OUT_DIR/index.html`` (with ``knots/``, ``thumbs/``, ``plotly.min.js``) and the
 screenshots ``OUT_DIR/screenshot-index.png`` (the top of the index page),
@@ -30,11 +31,18 @@ from stiffknots.report.atlas import write_atlas  # noqa: E402
 
 
 def main(argv: list[str]) -> int:
-    out = Path(argv[1] if len(argv) > 1 else "/tmp/atlas-demo")
-    index = write_atlas(out, synthetic_knots(), families=synthetic_families(),
-                        title="Atlas of stiff knots (demo: synthetic chains)",
-                        meta={"data": "synthetic chains of known shape, not annealed results"})
-    print(f"wrote {index}")
+    knot = "4_1"
+    if len(argv) > 2 and argv[1] == "--existing":
+        out = Path(argv[2])
+        index = out / "index.html"
+        knot = argv[3] if len(argv) > 3 else knot
+    else:
+        out = Path(argv[1] if len(argv) > 1 else "/tmp/atlas-demo")
+        index = write_atlas(out, synthetic_knots(), families=synthetic_families(),
+                            title="Atlas of stiff knots (demo: synthetic chains)",
+                            meta={"data": "synthetic chains of known shape, not annealed "
+                                          "results"})
+        print(f"wrote {index}")
     exe = find_chromium()
     if exe is None:
         print("no chromium (apt-get install -y chromium): no screenshots", file=sys.stderr)
@@ -45,7 +53,7 @@ def main(argv: list[str]) -> int:
         page.wait_for_selector("#eps-plot .main-svg")
         page.screenshot(path=str(out / "screenshot-index.png"))
         page.screenshot(path=str(out / "screenshot-index-full.png"), full_page=True)
-        page.goto((out / "knots" / "4_1.html").as_uri())
+        page.goto((out / "knots" / f"{knot}.html").as_uri())
         page.wait_for_selector("#view3d .gl-container canvas")
         time.sleep(0.5)
         page.screenshot(path=str(out / "screenshot-knot.png"), full_page=True)

@@ -19,12 +19,13 @@ def _clamp01(x):
     return x
 
 
-@njit(cache=True)
-def seg_dist2(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
-    """Squared distance between segments [a, b] and [c, d] (scalar arguments, no allocation).
+@njit(cache=True, inline="always")
+def seg_params(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
+    """Parameters (s, t) ∈ [0, 1]² of the closest points a + s(b − a) and c + t(d − c) of
+    segments [a, b] and [c, d] (scalar arguments, no allocation).
 
     Closest points of two segments (Ericson, *Real-Time Collision Detection*, §5.1.9), robust
-    for parallel and degenerate segments.
+    for parallel and degenerate segments (a point: its parameter is 0).
     """
     d1x = bx - ax
     d1y = by - ay
@@ -40,32 +41,36 @@ def seg_dist2(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     f = d2x * rx + d2y * ry + d2z * rz
     eps = 1e-300
     if a <= eps and e <= eps:
-        return rx * rx + ry * ry + rz * rz
+        return 0.0, 0.0
     if a <= eps:
-        s = 0.0
-        t = _clamp01(f / e)
+        return 0.0, _clamp01(f / e)
+    c = d1x * rx + d1y * ry + d1z * rz
+    if e <= eps:
+        return _clamp01(-c / a), 0.0
+    b = d1x * d2x + d1y * d2y + d1z * d2z
+    denom = a * e - b * b
+    if denom > 1e-14 * a * e:
+        s = _clamp01((b * f - c * e) / denom)
     else:
-        c = d1x * rx + d1y * ry + d1z * rz
-        if e <= eps:
-            t = 0.0
-            s = _clamp01(-c / a)
-        else:
-            b = d1x * d2x + d1y * d2y + d1z * d2z
-            denom = a * e - b * b
-            if denom > 1e-14 * a * e:
-                s = _clamp01((b * f - c * e) / denom)
-            else:
-                s = 0.0
-            t = (b * s + f) / e
-            if t < 0.0:
-                t = 0.0
-                s = _clamp01(-c / a)
-            elif t > 1.0:
-                t = 1.0
-                s = _clamp01((b - c) / a)
-    px = ax + d1x * s - (cx + d2x * t)
-    py = ay + d1y * s - (cy + d2y * t)
-    pz = az + d1z * s - (cz + d2z * t)
+        s = 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = _clamp01(-c / a)
+    elif t > 1.0:
+        t = 1.0
+        s = _clamp01((b - c) / a)
+    return s, t
+
+
+@njit(cache=True)
+def seg_dist2(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
+    """Squared distance between segments [a, b] and [c, d] (scalar arguments, no allocation):
+    the distance of the closest points of :func:`seg_params`."""
+    s, t = seg_params(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz)
+    px = ax + (bx - ax) * s - (cx + (dx - cx) * t)
+    py = ay + (by - ay) * s - (cy + (dy - cy) * t)
+    pz = az + (bz - az) * s - (cz + (dz - cz) * t)
     return px * px + py * py + pz * pz
 
 

@@ -289,7 +289,7 @@ def test_polish_never_accepts_a_passage():
 
 
 def open_trefoil():
-    from stiffknots.open_knots import open_chain
+    from stiffknots.problems.open_extension import open_chain
 
     return open_chain("3_1", 30)
 

@@ -91,6 +91,7 @@ def test_eighty_solution_is_two_free_closed_elastica():
     assert d["coarse_search"]["start_epsilon"] > d["coarse_search"]["epsilon"] + 5.0
 
 
+@pytest.mark.slow
 def test_eighty_energy_does_not_depend_on_the_contact_point():
     res = st.solve_structure(st.eighty(contact=0.25), (16, 32, 64, 128, 256), orders=3)
     assert res.epsilon == pytest.approx(EPS_80, abs=1e-6)

@@ -24,16 +24,17 @@ Classes and their criteria (thresholds in :class:`Thresholds`)
     with ``i = 1``: it is the ``i = 1`` member of the family (the unknot, ``ε = 2π²``) and is
     reported as ``CB`` with multiplicity 1.
 ``"4C"`` — 4-fold cage (Fig. 6, Fig. 7 b)
-    Structure: exactly two contact zones, each a point-braid of two strand passages (no
-    line-braid; strands within 45° of tangent), joined by exactly four free arcs, each running
-    from one point-braid to the other and carrying 10–40 % of the length. Geometry: the cage
-    is wrapped around a sphere (paper: "approximately wrapped around a sphere") — distances
-    to the centroid vary by ``≤ 15 %``, the chain is three-dimensional (inertia ratio
-    ``λ3/λ1 ≥ 0.2``), the two point-braids sit at opposite poles (their distance ``≥ 0.8``
-    of the sphere's diameter) and their axes (the common tangent of their strands) are
-    crossed, at least 60° apart — the four-fold symmetry of the cage. Annealed 4_1 cages at
-    ``N = 150`` give radial variation 0.06, ``λ3/λ1 ≈ 0.4``, pole distance ≈ 1.02 diameters
-    and pole axes 87–90° apart.
+    Structure: exactly two contact zones, each a point-braid of two strand passages (or a
+    two-strand line-braid no longer than 15 % of L: at a finite width the twist box of a cage
+    with three or more half-turns, as 5_2 = [32], is a short twisted stretch that becomes a
+    point-braid as w → 0; strands within 45° of tangent), joined by exactly four free arcs, each
+    running from one point-braid to the other and carrying 10–40 % of the length. Geometry: the
+    cage is wrapped around a sphere (paper: "approximately wrapped around a sphere") — distances
+    to the centroid vary by ``≤ 15 %``, the chain is three-dimensional (inertia ratio ``λ3/λ1 ≥
+    0.2``), the two point-braids sit at opposite poles (their distance ``≥ 0.8`` of the sphere's
+    diameter) and their axes (the common tangent of their strands) are crossed, at least 60°
+    apart — the four-fold symmetry of the cage. Annealed 4_1 cages at ``N = 150`` give radial
+    variation 0.06, ``λ3/λ1 ≈ 0.4``, pole distance ≈ 1.02 diameters and pole axes 87–90° apart.
 ``"80"`` — an 8 plus a circle (Fig. 7 c, eq. (27))
     The chain can be cut at one of its contacts into two closed sub-loops: a *circle* (the
     0: planar turning number ``±1``, radial variation about its centre ``≤ 0.2``, total
@@ -109,6 +110,10 @@ class Thresholds:
     # 4C
     c4_alignment_min: float = math.cos(math.radians(45.0))
     c4_arc_fraction: tuple[float, float] = (0.10, 0.40)
+    #: a pole may be a short two-strand line-braid: at a finite width the twist box of a
+    #: cage with a ≥ 3 half-turns (5_2 = [32]) is a twisted stretch ~10 % of L long, which
+    #: shrinks to a point-braid as w → 0 (§V B); longer line-braids are not poles
+    c4_pole_length_max: float = 0.15
     c4_radius_cv_max: float = 0.15
     c4_inertia_min: float = 0.20
     c4_pole_separation_min: float = 0.80
@@ -257,8 +262,9 @@ def _c4_features(x: np.ndarray, st: Structure, gfeat: dict, th: Thresholds
         and nodes[e.nodes[0]].zone != nodes[e.nodes[1]].zone for e in arcs)
     checks = {
         "two_zones": two,
-        "point_braids": two and all(z.kind != "line-braid" and z.strands == 2
-                                    and z.alignment >= th.c4_alignment_min for z in zones),
+        "point_braids": two and all(
+            (z.kind != "line-braid" or z.length <= th.c4_pole_length_max * length)
+            and z.strands == 2 and z.alignment >= th.c4_alignment_min for z in zones),
         "four_arcs": len(arcs) == 4,
         "arcs_join_poles": bool(joins) and len(arcs) == 4,
         "arc_lengths": len(arcs) == 4 and all(lo <= f <= hi for f in feats["arc_fractions"]),

@@ -117,7 +117,8 @@ from numba import njit
 from scipy.sparse.linalg import splu
 
 from stiffknots.engine.kernel import energy_chain
-from stiffknots.geometry import seg_dist2
+from stiffknots.geometry import _clamp01, seg_dist2
+from stiffknots.geometry import seg_params as _seg_params
 
 log = logging.getLogger(__name__)
 
@@ -132,55 +133,6 @@ GUARD_FLOOR = 1e-9  # the guard certifies that strands stay this far apart (≫ 
 # --------------------------------------------------------------------------------------------
 # compiled kernels (arrays and numbers only)
 # --------------------------------------------------------------------------------------------
-
-
-@njit(cache=True, inline="always")
-def _clamp01(x):
-    if x < 0.0:
-        return 0.0
-    if x > 1.0:
-        return 1.0
-    return x
-
-
-@njit(cache=True)
-def _seg_params(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
-    """Parameters (s, t) of the closest points of segments [a, b] and [c, d] (Ericson §5.1.9,
-    the same case analysis as :func:`stiffknots.geometry.seg_dist2`)."""
-    d1x = bx - ax
-    d1y = by - ay
-    d1z = bz - az
-    d2x = dx - cx
-    d2y = dy - cy
-    d2z = dz - cz
-    rx = ax - cx
-    ry = ay - cy
-    rz = az - cz
-    a = d1x * d1x + d1y * d1y + d1z * d1z
-    e = d2x * d2x + d2y * d2y + d2z * d2z
-    f = d2x * rx + d2y * ry + d2z * rz
-    eps = 1e-300
-    if a <= eps and e <= eps:
-        return 0.0, 0.0
-    if a <= eps:
-        return 0.0, _clamp01(f / e)
-    c = d1x * rx + d1y * ry + d1z * rz
-    if e <= eps:
-        return _clamp01(-c / a), 0.0
-    b = d1x * d2x + d1y * d2y + d1z * d2z
-    denom = a * e - b * b
-    if denom > 1e-14 * a * e:
-        s = _clamp01((b * f - c * e) / denom)
-    else:
-        s = 0.0
-    t = (b * s + f) / e
-    if t < 0.0:
-        t = 0.0
-        s = _clamp01(-c / a)
-    elif t > 1.0:
-        t = 1.0
-        s = _clamp01((b - c) / a)
-    return s, t
 
 
 @njit(cache=True)
