@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -18,7 +17,6 @@ from stiffknots.cli.app import (
     PolishOpt,
     ReplicaProgress,
     ReplicasOpt,
-    ResultsFolder,
     ResumeOpt,
     SeedOpt,
     StartOpt,
@@ -27,7 +25,7 @@ from stiffknots.cli.app import (
     choice,
     claim_checkpoint,
     count,
-    dump,
+    emit,
     finish,
     fmt,
     out,
@@ -35,18 +33,6 @@ from stiffknots.cli.app import (
     tube_only,
     width_of,
 )
-
-
-def save_results(res, out_dir: Path, title: str, command: str) -> dict:
-    """``res.save`` plus a picture of the best chain, the manifest written last; on Ctrl-C or
-    an error none of it stays (:class:`ResultsFolder`)."""
-    from stiffknots.report.render import save_chain_png
-
-    with ResultsFolder(out_dir, command):
-        paths = res.save(out_dir)
-        png = save_chain_png(res.best.coords, out_dir / "best.png", closed=res.closed,
-                             title=title)
-    return {k: str(v) for k, v in paths.items()} | {"png": str(png)}
 
 
 def anneal(
@@ -147,12 +133,8 @@ def anneal(
     d["width"] = width
     if checkpoint is not None:
         d["checkpoint_dir"] = str(checkpoint)
-    if out_dir is not None:
-        d["files"] = save_results(res, out_dir, f"{res.knot}: ε = {res.best.epsilon:.3f} "
-                                  f"({width['text']})", "anneal")
-    if json_:
-        dump(d)
-        finish(res, replicas, hint)
+    if emit(res, d, out_dir, f"{res.knot}: ε = {res.best.epsilon:.3f} ({width['text']})",
+            "anneal", json_, replicas, hint):
         return
     t = Table(title=escape(f"{res.knot}, {width['text']}, {res.settings['moves']:,} "
                            "moves/replica"))

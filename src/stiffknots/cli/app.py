@@ -56,6 +56,7 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print a JSON object for s
 ReplicasOpt = Annotated[int, typer.Option(help="Independent replicas (run on all cores).",
                                           parser=count)]
 SeedOpt = Annotated[int, typer.Option(help="Seed (replica seeds derive from it).")]
+MovesOpt = Annotated[int, typer.Option(help="Attempted moves per replica.", parser=count)]
 OutOpt = Annotated[str | None, typer.Option(
     "--out", help="Write the results into this folder (refused if it holds another run's "
                   "results, unless --overwrite).")]
@@ -436,3 +437,29 @@ def width_of(params, beads: int) -> dict:
     from stiffknots.engine.params import width_of as _width_of
 
     return _width_of(params, beads)
+
+
+def save_results(res, out_dir: Path, title: str, command: str) -> dict:
+    """``res.save`` plus a picture of the best chain, the manifest written last; on Ctrl-C or
+    an error none of it stays (:class:`ResultsFolder`)."""
+    from stiffknots.report.render import save_chain_png
+
+    with ResultsFolder(out_dir, command):
+        paths = res.save(out_dir)
+        png = save_chain_png(res.best.coords, out_dir / "best.png", closed=res.closed,
+                             title=title)
+    return {k: str(v) for k, v in paths.items()} | {"png": str(png)}
+
+
+def emit(res, d: dict, out_dir: Path | None, title: str, command: str, json_: bool,
+         total: int | None = None, resume_hint: str | None = None) -> bool:
+    """The end of a solver command: the results written into ``out_dir`` (when given, their
+    paths in ``d["files"]``) and, with --json, ``d`` printed and the command finished. True
+    when the command is done (--json); False when it goes on to print its tables."""
+    if out_dir is not None:
+        d["files"] = save_results(res, out_dir, title, command)
+    if json_:
+        dump(d)
+        finish(res, total, resume_hint)
+        return True
+    return False

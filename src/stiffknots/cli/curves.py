@@ -179,10 +179,10 @@ def relax(
 ) -> None:
     """Relax a curve from a file (resampled to N unit bonds, type kept and checked) to the
     nearest stiff-knot equilibrium; reports its ε before and after and its shape."""
-    from stiffknots.cli.anneal import save_results
     from stiffknots.cli.app import (
         ReplicaProgress,
         check_interrupted,
+        emit,
         finish,
         prepare_out,
         width_of,
@@ -202,12 +202,8 @@ def relax(
     check_interrupted(res)
     width = width_of(problem.settings.params, beads)
     d = res.to_dict() | {"file": str(file), "closure": closure_note(chain), "width": width}
-    if out_path is not None:
-        d["files"] = save_results(res, out_path, f"{res.knot}: ε = {res.epsilon:.3f} "
-                                  f"({width['text']})", "relax")
-    if json_:
-        dump(d)
-        finish(res, replicas)
+    if emit(res, d, out_path, f"{res.knot}: ε = {res.epsilon:.3f} ({width['text']})", "relax",
+            json_, replicas):
         return
     out.print(f"{file}: {d['closure']}", markup=False, highlight=False)
     out.print(f"{res.knot}: ε = {d['input_epsilon']:.4f} as given → {d['epsilon']:.4f} relaxed "

@@ -12,6 +12,7 @@ from rich.table import Table
 
 from stiffknots.cli.app import (
     JsonOpt,
+    MovesOpt,
     OutOpt,
     OverwriteOpt,
     ReplicaProgress,
@@ -50,8 +51,7 @@ def open_knot(
     beads: Annotated[int | None, typer.Option(
         help="Beads N of the chain (--ensemble force only; default: the embedding with "
              "⌈L_e/4⌉ beads added to each straight end).", parser=count)] = None,
-    moves: Annotated[int, typer.Option(help="Attempted moves per replica.", parser=count)
-                     ] = 30_000_000,
+    moves: MovesOpt = 30_000_000,
     replicas: ReplicasOpt = 2,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(

@@ -6,9 +6,9 @@ from typing import Annotated
 
 import typer
 
-from stiffknots.cli.anneal import save_results
 from stiffknots.cli.app import (
     JsonOpt,
+    MovesOpt,
     OutOpt,
     OverwriteOpt,
     ReplicaProgress,
@@ -18,7 +18,7 @@ from stiffknots.cli.app import (
     check_interrupted,
     choice,
     count,
-    dump,
+    emit,
     finish,
     fmt,
     out,
@@ -35,8 +35,7 @@ def tightest(
              "printed in that unit too (the search itself is scale-free: L†/R).")] = None,
     beads: Annotated[int, typer.Option(help="Resolution N (finer → thinner limit).",
                                        parser=count)] = 150,
-    moves: Annotated[int, typer.Option(help="Attempted moves per replica.", parser=count)
-                     ] = 30_000_000,
+    moves: MovesOpt = 30_000_000,
     replicas: ReplicasOpt = 2,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(
@@ -75,12 +74,8 @@ def tightest(
     d["width"] = width
     if max_curvature is not None:
         d["length"] = d["length_over_R"] / max_curvature
-    if out_dir is not None:
-        d["files"] = save_results(res, out_dir, f"{res.knot}: L†/R = {res.length_over_R:.3f} "
-                                  f"({width['text']})", "tightest")
-    if json_:
-        dump(d)
-        finish(res, replicas)
+    if emit(res, d, out_dir, f"{res.knot}: L†/R = {res.length_over_R:.3f} ({width['text']})",
+            "tightest", json_, replicas):
         return
     b = res.bounds
     out.print(f"{res.knot}: L†/R = {d['length_over_R']:.4f} at {width['text']} (bounds "

@@ -185,6 +185,24 @@ NB_NMETA = 2
 
 
 @njit(cache=True, inline="always")
+def _pivot(u, n, span, is_open):
+    """The first pivot j of a move from the uniform draw u ∈ [0, 1): 1 ≤ j ≤ span on an open
+    chain (its clamped end segments never move), 0 ≤ j < n on a ring; −1 when an open chain
+    has no room for the move (span < 1)."""
+    if is_open:
+        if span < 1:
+            return -1
+        j = 1 + int(u * span)
+        if j > span:
+            j = span
+        return j
+    j = int(u * n)
+    if j >= n:
+        j = n - 1
+    return j
+
+
+@njit(cache=True, inline="always")
 def _single_limits(lmove, w, d, mode):
     """(dseg = max(w, L), radius R around the moved bead's new place that holds the midpoint
     of every fixed segment a single-bead move must test (module docstring, Cell list), with
@@ -427,17 +445,10 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
             # below with m = 1, so both give the same chains)
             n_single += 1
             u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-            if is_open:
-                span = n - 4  # pivots 1 ≤ j and k ≤ N − 2: the clamped ends never move
-                if span < 1:
-                    continue
-                j = 1 + int(u * span)
-                if j > span:
-                    j = span
-            else:
-                j = int(u * n)
-                if j >= n:
-                    j = n - 1
+            # pivots 1 ≤ j and k ≤ N − 2 on an open chain: the clamped ends never move
+            j = _pivot(u, n, n - 4, is_open)
+            if j < 0:
+                continue
             i = j + 1 if j < n - 1 else 0
             k = i + 1 if i < n - 1 else 0
             # unsigned indices: no test for negative (wrap-around) indices in the loads
@@ -554,18 +565,10 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
         cls = 1
         cnt[C_TRIED + cls] += 1
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        if is_open:
-            # pivots 1 ≤ j and k ≤ N−2: the clamped end segments never move
-            span = n - 3 - m
-            if span < 1:
-                continue
-            j = 1 + int(u * span)
-            if j > span:
-                j = span
-        else:
-            j = int(u * n)
-            if j >= n:
-                j = n - 1
+        # pivots 1 ≤ j and k ≤ N−2 on an open chain: the clamped end segments never move
+        j = _pivot(u, n, n - 3 - m, is_open)
+        if j < 0:
+            continue
         k = j + m + 1
         if k >= n:
             k -= n

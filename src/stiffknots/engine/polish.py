@@ -468,14 +468,12 @@ def _min_clearance(pos, mode, lim, is_open):
     nseg = n - 1 if is_open else n
     for a in range(nseg):
         a1 = a + 1 if a < n - 1 else 0
-        ha = 0.5 * math.sqrt((pos[a1, 0] - pos[a, 0]) ** 2 + (pos[a1, 1] - pos[a, 1]) ** 2
-                             + (pos[a1, 2] - pos[a, 2]) ** 2)
+        ha = _half_length(pos, a, a1)
         for b in range(a + 2, nseg):
             if not is_open and a == 0 and b == n - 1:
                 continue
             b1 = b + 1 if b < n - 1 else 0
-            hb = 0.5 * math.sqrt((pos[b1, 0] - pos[b, 0]) ** 2 + (pos[b1, 1] - pos[b, 1]) ** 2
-                                 + (pos[b1, 2] - pos[b, 2]) ** 2)
+            hb = _half_length(pos, b, b1)
             mx = 0.5 * (pos[a, 0] + pos[a1, 0] - pos[b, 0] - pos[b1, 0])
             my = 0.5 * (pos[a, 1] + pos[a1, 1] - pos[b, 1] - pos[b1, 1])
             mz = 0.5 * (pos[a, 2] + pos[a1, 2] - pos[b, 2] - pos[b1, 2])
@@ -512,6 +510,30 @@ def _rel_disp(old, new, i, j):
     return math.sqrt(s)
 
 
+@njit(cache=True, inline="always")
+def _half_length(pos, a, a1):
+    """Half the length of segment (a, a1) of ``pos``."""
+    return 0.5 * math.sqrt((pos[a1, 0] - pos[a, 0]) ** 2 + (pos[a1, 1] - pos[a, 1]) ** 2
+                           + (pos[a1, 2] - pos[a, 2]) ** 2)
+
+
+@njit(cache=True)
+def _pair_clear(old, new, a, a1, b, b1, lip, max_depth):
+    """No passage of segments (a, a1) and (b, b1) along the step old → new, whose relative
+    displacement is at most ``lip``: a rigid relative motion (lip = 0) keeps the distance;
+    D(1) > lip or D(0) + D(1) > lip (plus the floor) clears the pair at once (the distance is
+    lip-Lipschitz along the step); otherwise :func:`_path_clear` bisects the step."""
+    if lip == 0.0:
+        return True
+    d1 = _seg_dist_at(old, new, 1.0, a, a1, b, b1)
+    if d1 - lip > GUARD_FLOOR:
+        return True
+    d0 = _seg_dist_at(old, new, 0.0, a, a1, b, b1)
+    if d0 + d1 - lip > 2.0 * GUARD_FLOOR:
+        return True
+    return _path_clear(old, new, a, a1, b, b1, d0, d1, lip, max_depth)
+
+
 @njit(cache=True)
 def _path_clear(old, new, a, a1, b, b1, d0, d1, lip, max_depth):
     """Certify D(t) > GUARD_FLOOR on [0, 1] for the segment pair, D lip-Lipschitz in t.
@@ -546,19 +568,21 @@ def _path_clear(old, new, a, a1, b, b1, d0, d1, lip, max_depth):
         em = _seg_dist_at(old, new, tm, a, a1, b, b1)
         if em <= GUARD_FLOOR:
             return False
-        top += 1
-        st0[top] = tm
-        st1[top] = t1
-        sd0[top] = em
-        sd1[top] = e1
-        sdp[top] = dep + 1
-        top += 1
-        st0[top] = t0
-        st1[top] = tm
-        sd0[top] = e0
-        sd1[top] = em
-        sdp[top] = dep + 1
+        top = _push(st0, st1, sd0, sd1, sdp, top, tm, t1, em, e1, dep + 1)
+        top = _push(st0, st1, sd0, sd1, sdp, top, t0, tm, e0, em, dep + 1)
     return True
+
+
+@njit(cache=True, inline="always")
+def _push(st0, st1, sd0, sd1, sdp, top, t0, t1, e0, e1, dep):
+    """Push the sub-interval [t0, t1] (distances e0, e1, depth dep) on the bisection stack."""
+    top += 1
+    st0[top] = t0
+    st1[top] = t1
+    sd0[top] = e0
+    sd1[top] = e1
+    sdp[top] = dep
+    return top
 
 
 @njit(cache=True)
@@ -582,8 +606,7 @@ def _passage_ok(old, new, is_open, nfix, zlo, zhi, max_depth):
     for a in range(nseg):
         a1 = a + 1 if a < n - 1 else 0
         da = disp[a] if disp[a] > disp[a1] else disp[a1]
-        ha = 0.5 * math.sqrt((new[a1, 0] - new[a, 0]) ** 2 + (new[a1, 1] - new[a, 1]) ** 2
-                             + (new[a1, 2] - new[a, 2]) ** 2)
+        ha = _half_length(new, a, a1)
         for b in range(a + 2, nseg):
             if not is_open and a == 0 and b == n - 1:
                 continue
@@ -592,8 +615,7 @@ def _passage_ok(old, new, is_open, nfix, zlo, zhi, max_depth):
             bound = da + db  # ≥ the relative Lipschitz constant below
             if bound == 0.0:
                 continue
-            hb = 0.5 * math.sqrt((new[b1, 0] - new[b, 0]) ** 2 + (new[b1, 1] - new[b, 1]) ** 2
-                                 + (new[b1, 2] - new[b, 2]) ** 2)
+            hb = _half_length(new, b, b1)
             mx = 0.5 * (new[a, 0] + new[a1, 0] - new[b, 0] - new[b1, 0])
             my = 0.5 * (new[a, 1] + new[a1, 1] - new[b, 1] - new[b1, 1])
             mz = 0.5 * (new[a, 2] + new[a1, 2] - new[b, 2] - new[b1, 2])
@@ -601,15 +623,7 @@ def _passage_ok(old, new, is_open, nfix, zlo, zhi, max_depth):
                 continue  # D_after > bound + floor ≥ lip + floor
             lip = max(_rel_disp(old, new, a, b), _rel_disp(old, new, a, b1),
                       _rel_disp(old, new, a1, b), _rel_disp(old, new, a1, b1))
-            if lip == 0.0:
-                continue  # rigid relative motion: the distance does not change
-            d1 = _seg_dist_at(old, new, 1.0, a, a1, b, b1)
-            if d1 - lip > GUARD_FLOOR:
-                continue
-            d0 = _seg_dist_at(old, new, 0.0, a, a1, b, b1)
-            if d0 + d1 - lip > 2.0 * GUARD_FLOOR:
-                continue
-            if not _path_clear(old, new, a, a1, b, b1, d0, d1, lip, max_depth):
+            if not _pair_clear(old, new, a, a1, b, b1, lip, max_depth):
                 return False
     # bonded segments (k-1, k) and (k, k+1): no fold-back
     lo = 1 if is_open else 0
@@ -623,15 +637,7 @@ def _passage_ok(old, new, is_open, nfix, zlo, zhi, max_depth):
             else:
                 v, s0 = km, kp  # bead k-1 against segment (k, k+1)
             lip = max(_rel_disp(old, new, v, s0), _rel_disp(old, new, v, k))
-            if lip == 0.0:
-                continue
-            d1 = _seg_dist_at(old, new, 1.0, v, v, s0, k)
-            if d1 - lip > GUARD_FLOOR:
-                continue
-            d0 = _seg_dist_at(old, new, 0.0, v, v, s0, k)
-            if d0 + d1 - lip > 2.0 * GUARD_FLOOR:
-                continue
-            if not _path_clear(old, new, v, v, s0, k, d0, d1, lip, max_depth):
+            if not _pair_clear(old, new, v, v, s0, k, lip, max_depth):
                 return False
     return True
 
