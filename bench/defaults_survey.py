@@ -34,13 +34,13 @@ def main(argv: list[str]) -> None:
             print(f"{name:6s} rc={p.returncode} {p.stderr.strip()[-200:]}", flush=True)
             continue
         d = json.loads(p.stdout)
-        conv = d.get("convergence") or {}
-        row = {"knot": name, "rc": 0, "epsilon": d["best"]["epsilon"],
-               "shape": d["best"].get("shape"), "converged": d.get("converged"),
-               "reason": conv.get("reason"), "rounds": d.get("rounds"),
+        row = {"knot": name, "rc": 0, "epsilon": d["epsilon"],
+               "shape": d.get("shape"), "converged": d.get("converged"),
+               "reason": d.get("convergence"), "rounds": d.get("rounds"),
                "replicas": len(d.get("replicas", [])), "wall_s": round(wall, 1),
                "width": d.get("width")}
         rows.append(row)
+        Path(__file__).with_name("defaults_survey.json").write_text(json.dumps(rows, indent=2))
         print(f"{name:6s} ε = {row['epsilon']:9.3f}  {str(row['shape']):7s} "
               f"converged={row['converged']!s:5s} rounds={row['rounds']} "
               f"{row['wall_s']:6.1f} s  {row['reason']}", flush=True)
