@@ -262,8 +262,11 @@ def test_every_option_of_every_command_is_probed():
         for pname in inspect.signature(cmd.callback).parameters:
             ann = hints[pname]
             opts = [m for m in getattr(ann, "__metadata__", ()) if type(m).__name__ == "OptionInfo"]
-            if not opts or typing.get_args(ann)[0] is bool:
-                continue  # an argument (probed through the knot names) or a flag
+            base = typing.get_args(ann)[0] if opts else None
+            if not opts or set(typing.get_args(base) or (base,)) <= {bool, type(None)}:
+                # an argument (probed through the knot names) or a flag: bool, or bool | None
+                # (a pair such as --closed/--open, unset by default)
+                continue
             o = opts[0]  # typer.Option("--out", ...) keeps the name as its default
             decls = [d for d in (*(o.param_decls or ()), o.default)
                      if isinstance(d, str) and d.startswith("--")]
