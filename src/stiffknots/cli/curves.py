@@ -119,17 +119,17 @@ def resample(
 ) -> None:
     """Resample a closed curve into N equal unit bonds that keep its knot type (checked)."""
     from stiffknots.cli.app import prepare_file
-    from stiffknots.formats import READ_SUFFIXES, closure_note, save
+    from stiffknots.formats import check_readable, closure_note, save
     from stiffknots.knots.resample import resample as _resample
     from stiffknots.problems import validate as V
 
     V.beads(beads)
+    if dest.is_dir():
+        raise UserError(f"DEST {dest} is a folder; give the path of a file")
     if dest.suffix.lower() not in (".xyz", ".json", ".npz", ".obj", ".vect"):
         raise UserError(f"{dest}: unknown suffix {dest.suffix!r}; use .xyz, .json, .npz, .obj "
                         "or .vect")
-    if file.suffix.lower() not in READ_SUFFIXES:
-        raise UserError(f"{file}: unknown suffix {file.suffix!r}; use one of "
-                        f"{', '.join(READ_SUFFIXES)}")
+    check_readable(file)
     prepare_file(dest, "DEST")  # checked before any work
     chain = _load(file, closed)
     if not chain.closed:
