@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from stiffknots.cli.app import JsonOpt, UserError, dump, fmt, out
+from stiffknots.cli.app import JsonOpt, ReplicasOpt, UserError, count, dump, fmt, out
 
 FileArg = Annotated[Path, typer.Argument(
     help="A curve: .xyz, .txt/.dat/.csv/.tsv (x y z), .json, .npz/.npy, .obj (ElasticKnots), "
@@ -154,7 +154,8 @@ def resample(
 
 def relax(
     file: FileArg,
-    beads: Annotated[int, typer.Option(help="Number of beads N of the relaxed chain.")] = 150,
+    beads: Annotated[int, typer.Option(help="Number of beads N of the relaxed chain.",
+                                       parser=count)] = 150,
     exclusion: Annotated[str, typer.Option(
         help="bead (the paper's rule, d = 1/√2 bond) or tube (diameter w = (w/L)·N).")
     ] = "bead",
@@ -163,9 +164,9 @@ def relax(
     knot: Annotated[str | None, typer.Option(
         help="The knot's name, when the invariants cannot tell (a HOMFLY-PT tie).")] = None,
     moves: Annotated[int | None, typer.Option(
-        help="Monte Carlo moves per replica (default: 40 % of the annealing budget at N).")
-    ] = None,
-    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
+        help="Monte Carlo moves per replica (default: 40 % of the annealing budget at N; "
+             "3e7 works too).", parser=count)] = None,
+    replicas: ReplicasOpt = 2,
     seed: Annotated[int, typer.Option(help="Seed.")] = 0,
     closed: ClosedOpt = None,
     polish: Annotated[bool, typer.Option(
@@ -184,6 +185,7 @@ def relax(
         ReplicaProgress,
         check_interrupted,
         finish,
+        prepare_folder,
         prepare_out,
         width_of,
     )
@@ -194,6 +196,7 @@ def relax(
     if w_over_l is not None:
         exclusion = "tube"
     chain = _load(file, closed)
+    prepare_folder(out_dir, "--out")  # writable (created now, removed if the command fails)
     problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
                     w_over_L=w_over_l, knot=knot, polish=polish)
     out_path = prepare_out(out_dir, overwrite)
