@@ -381,7 +381,7 @@ CHECKPOINTS = {"empty": b"", "junk": b"junk, not a checkpoint\n",
 # curve files that cannot be read (identify, resample, relax, anneal --from)
 BAD_CURVES = {"empty.xyz": b"", "junk.vect": b"junk\n", "junk.json": b'{"a": 1}\n',
               "junk.npz": b"junk, not an archive\n", "binary.xyz": bytes(range(256)),
-              "nan.xyz": b"3\nnan\nC 0 0 0\nC nan 0 0\nC 1 1 0\n",
+              "nan.xyz": b"3\na NaN vertex\nC 0 0 0\nC nan 0 0\nC 1 1 0\n",
               "two.xyz": b"2\ntwo vertices\nC 0 0 0\nC 1 0 0\n",
               "same.xyz": b"4\none vertex\n" + b"C 0 0 0\n" * 4}
 
