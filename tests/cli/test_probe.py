@@ -138,7 +138,7 @@ CASES = [
     ("open 3_1 --seed -1", r"--seed must be an integer", False),
     ("open 3_1 --m-max 0", r"--m-max must be an integer", False),
     ("open 3_1 --m-max 10000", r"--m-max must be an integer in \[1, 147\]", False),
-    ("open 3_1 --w 0.1", r"--w applies to --exclusion tube only", False),
+    ("open 3_1 --exclusion bead --w 0.1", r"--w applies to --exclusion tube only", False),
     ("open 3_1 --exclusion tube --w nan", r"--w must be a finite number", False),
     ("open 0_1", r"no braid word", False),
     ("open 3_1 --out {file}/sub", r"--out .*: cannot write there", False),

@@ -140,6 +140,9 @@ def anneal(
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
                            resume=resume, start=start, rounds=rounds, initial=initial,
                            polish=polish)
+    if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
+        for rnd in range(rounds):
+            V.checkpoints(problem.jobs(first=rnd * replicas))
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
                          disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
