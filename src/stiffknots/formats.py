@@ -100,6 +100,7 @@ from stiffknots.fileio import atomic_path
 __all__ = [
     "READ_SUFFIXES",
     "ChainFormatError",
+    "check_readable",
     "closure_note",
     "from_json",
     "from_npy",
@@ -825,11 +826,23 @@ def load(path: PathLike, closed: bool | None = None, **kwargs: Any) -> Chain:
     what the format records is obeyed, a repeated first vertex means closed, and otherwise the
     chain is *assumed closed*; ``meta["closure"]`` says which. True/False force it.
     """
-    suffix = Path(path).suffix.lower()
+    check_readable(path)
+    return _READERS[Path(path).suffix.lower()](path, closed=closed, **kwargs)
+
+
+def check_readable(path: PathLike) -> None:
+    """Before any reading: ``path`` names an existing file (not '', not a folder) with one of
+    the suffixes of :data:`READ_SUFFIXES`; ChainFormatError (one line) otherwise."""
+    if str(path).strip() == "":
+        raise ChainFormatError("no chain file given (an empty path)")
+    p = Path(path)
+    if p.is_dir():
+        raise ChainFormatError(f"{path}: is a folder; give a chain file "
+                               f"({', '.join(_READERS)})")
+    suffix = p.suffix.lower()
     if suffix not in _READERS:
         raise ChainFormatError(
             f"{path}: unknown chain file suffix {suffix!r}; use one of {', '.join(_READERS)}"
         )
-    if not Path(path).exists():
+    if not p.exists():
         raise ChainFormatError(f"{path}: no such file")
-    return _READERS[suffix](path, closed=closed, **kwargs)

@@ -27,7 +27,8 @@ CLI = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "stiffknots
 
 # (arguments, regular expression the error line must match, fast): {out} is a folder that does
 # not exist yet, {file} an existing file, {ck} a checkpoint folder holding the bad file of the
-# case (see CHECKPOINTS)
+# case (see CHECKPOINTS), {bad} a folder of bad curve files (see BAD_CURVES), {data} the folder
+# of good curves (tests/data/curves/ridgerunner)
 CASES = [
     # --- anneal ---------------------------------------------------------------------------
     ("anneal 3_1 --beads abc", r"Invalid value for '--beads'.*not a number", True),
@@ -137,7 +138,7 @@ CASES = [
     ("open 3_1 --seed -1", r"--seed must be an integer", False),
     ("open 3_1 --m-max 0", r"--m-max must be an integer", False),
     ("open 3_1 --m-max 10000", r"--m-max must be an integer in \[1, 147\]", False),
-    ("open 3_1 --w 0.1", r"--w applies to --exclusion tube only", False),
+    ("open 3_1 --exclusion bead --w 0.1", r"--w applies to --exclusion tube only", False),
     ("open 3_1 --exclusion tube --w nan", r"--w must be a finite number", False),
     ("open 0_1", r"no braid word", False),
     ("open 3_1 --out {file}/sub", r"--out .*: cannot write there", False),
@@ -195,16 +196,201 @@ CASES = [
     ("families --max-crossings 0", r"--max-crossings must be between 3 and 13", False),
     ("families --max-crossings 20", r"--max-crossings must be between 3 and 13", False),
     ("families --max-crossings x", r"Invalid value for '--max-crossings'", False),
+    # --- identify, resample, relax: curve files ({data}: tests/data/curves/ridgerunner) ------
+    ("identify {bad}/nothere.xyz", r"nothere\.xyz: no such file", True),
+    ("identify ''", r"\.: is a folder; give a chain file", False),
+    ("identify {ck}", r"ck: is a folder; give a chain file", False),
+    ("identify {bad}/dir.vect", r"dir\.vect: is a folder", False),
+    ("identify {file}", r"afile: unknown chain file suffix ''", True),
+    ("identify {bad}/empty.xyz", r"empty\.xyz: empty file", False),
+    ("identify {bad}/junk.vect", r"junk\.vect, line 1: a VECT file starts with 'VECT'", False),
+    ("identify {bad}/junk.json", r"junk\.json: 'format' is None", False),
+    ("identify {bad}/junk.npz", r"junk\.npz: not an npz archive", False),
+    ("identify {bad}/binary.xyz", r"binary\.xyz: not a text file", False),
+    ("identify {bad}/nan.xyz", r"nan\.xyz, line 4: non-finite coordinates", False),
+    ("identify {bad}/two.xyz", r"a closed chain needs at least 3 beads, got 2", False),
+    ("identify {bad}/same.xyz", r"the same vertex twice in a row", False),
+    ("identify {data}/3.1.vect --closed --open --bogus", r"No such option: --bogus", False),
+    ("resample {data}/3.1.vect {out}/r.xyz --beads 0", r"--beads must be an integer in "
+     r"\[8, 20,000\], got 0", True),
+    ("resample {data}/3.1.vect {out}/r.xyz --beads -3", r"--beads must be an integer", False),
+    ("resample {data}/3.1.vect {out}/r.xyz --beads 1000000", r"--beads must be an integer",
+     False),
+    ("resample {data}/3.1.vect {out}/r.xyz --beads abc", r"Invalid value for '--beads'",
+     False),
+    ("resample {data}/3.1.vect {out}/r.xyz --w-over-L nan",
+     r"--w-over-L must be a number in \[0, 1\), got nan", True),
+    ("resample {data}/3.1.vect {out}/r.xyz --w-over-L inf", r"--w-over-L must be a number",
+     False),
+    ("resample {data}/3.1.vect {out}/r.xyz --w-over-L -0.01", r"--w-over-L must be a number",
+     False),
+    ("resample {data}/3.1.vect {out}/r.xyz --w-over-L 1", r"--w-over-L must be a number",
+     False),
+    ("resample {data}/3.1.vect {out}/r.xyz --w-over-L 1e300", r"--w-over-L must be a number",
+     False),
+    ("resample {data}/3.1.vect {out}/r.xyz --w-over-L x", r"Invalid value for '--w-over-L'",
+     False),
+    ("resample {data}/3.1.vect {out}/r.xyz --open", r"resample needs a closed curve", False),
+    ("resample {data}/3.1.vect {out}/r.txt", r"r\.txt: unknown suffix '\.txt'", False),
+    ("resample {data}/3.1.vect ''", r"DEST \. is a folder; give the path of a file", False),
+    ("resample {data}/3.1.vect {file}/r.xyz", r"DEST .*: cannot write there", True),
+    ("resample {data}/3.1.vect /proc/x/r.xyz", r"DEST /proc/x/r\.xyz: cannot write there",
+     False),
+    ("resample {bad}/nothere.xyz {out}/r.xyz", r"nothere\.xyz: no such file", False),
+    ("resample {ck} {out}/r.xyz", r"ck: is a folder; give a chain file", False),
+    ("resample {bad}/empty.xyz {out}/r.xyz", r"empty\.xyz: empty file", False),
+    ("relax {data}/3.1.vect --beads 0", r"--beads must be an integer in \[8, 20,000\], got 0",
+     True),
+    ("relax {data}/3.1.vect --beads 1.5", r"--beads must be an integer", False),
+    ("relax {data}/3.1.vect --beads 1000000", r"--beads must be an integer", False),
+    ("relax {data}/3.1.vect --beads abc", r"Invalid value for '--beads'", False),
+    ("relax {data}/3.1.vect --beads 10", r"thinner than the model .*use --beads ≥ 12", False),
+    ("relax {data}/3.1.vect --exclusion soft", r"--exclusion must be one of bead, tube", True),
+    ("relax {data}/3.1.vect --exclusion tube", r"--w-over-L must be given for the tube model",
+     False),
+    ("relax {data}/3.1.vect --w-over-L nan", r"--w-over-L must be a finite number in "
+     r"\(0, 0\.125\], got nan", True),
+    ("relax {data}/3.1.vect --w-over-L inf", r"--w-over-L must be a finite number", False),
+    ("relax {data}/3.1.vect --w-over-L 0", r"--w-over-L must be a finite number", False),
+    ("relax {data}/3.1.vect --w-over-L -1", r"--w-over-L must be a finite number", False),
+    ("relax {data}/3.1.vect --w-over-L 0.1", r"--w-over-L must be below 1/N = 0\.00667",
+     False),
+    ("relax {data}/3.1.vect --w-over-L x", r"Invalid value for '--w-over-L'", False),
+    ("relax {data}/3.1.vect --knot ''", r"--knot must be a knot name such as 3_1", True),
+    ("relax {data}/3.1.vect --knot nonsense", r"unknown knot 'nonsense'", False),
+    ("relax {data}/3.1.vect --knot 3_1#nonsense", r"unknown knot 'nonsense'", False),
+    ("relax {data}/3.1.vect --knot 4_1", r"the curve is 3_1, not 4_1", False),
+    ("relax {data}/3.1.vect --moves 0", r"--moves must be an integer in \[1,000", True),
+    ("relax {data}/3.1.vect --moves -5", r"--moves must be an integer", False),
+    ("relax {data}/3.1.vect --moves 1e23", r"--moves must be an integer in \[1,000, "
+     r"1,000,000,000,000\], got 100000000000000000000000", False),
+    ("relax {data}/3.1.vect --moves nan", r"--moves must be an integer", False),
+    ("relax {data}/3.1.vect --moves lots", r"Invalid value for '--moves'", False),
+    ("relax {data}/3.1.vect --replicas 0", r"--replicas must be an integer in \[1, 1,000\]",
+     True),
+    ("relax {data}/3.1.vect --replicas 100000", r"--replicas must be an integer", False),
+    ("relax {data}/3.1.vect --replicas x", r"Invalid value for '--replicas'", False),
+    ("relax {data}/3.1.vect --seed -1", r"--seed must be an integer in \[0, ", True),
+    ("relax {data}/3.1.vect --seed 99999999999999999999999", r"--seed must be an integer",
+     False),
+    ("relax {data}/3.1.vect --seed x", r"Invalid value for '--seed'", False),
+    ("relax {data}/3.1.vect --open", r"relax takes a closed curve", False),
+    ("relax {data}/3.1.vect --out ''", r"--out must name a folder, got ''", False),
+    ("relax {data}/3.1.vect --out {file}", r"--out .*: exists and is not a folder", True),
+    ("relax {data}/3.1.vect --out {file}/sub", r"--out .*: cannot write there", False),
+    ("relax {data}/3.1.vect --out /proc/x", r"--out /proc/x: cannot write there", False),
+    ("relax {data}/3.1.vect --out {out} --seed -1", r"--seed must be an integer", False),
+    ("relax {bad}/nothere.vect --out {out}", r"nothere\.vect: no such file", False),
+    ("relax {bad}/junk.vect", r"a VECT file starts with 'VECT'", False),
+    # --- anneal: --rounds, --from -------------------------------------------------------------
+    ("anneal 3_1 --rounds 0", r"--rounds must be an integer in \[1, 100\], got 0", True),
+    ("anneal 3_1 --rounds -1", r"--rounds must be an integer in \[1, 100\]", False),
+    ("anneal 3_1 --rounds 1000", r"--rounds must be an integer in \[1, 100\]", False),
+    ("anneal 3_1 --rounds 1.5", r"Invalid value for '--rounds'", False),
+    ("anneal 3_1 --rounds x", r"Invalid value for '--rounds'", False),
+    ("anneal 3_1 --from ''", r"--from must name a curve file, got ''", True),
+    ("anneal 3_1 --from {bad}/nothere.xyz", r"--from .*nothere\.xyz: no such file", True),
+    ("anneal 3_1 --from {bad}/nothere.xyz --out {out}", r"--from .*: no such file", False),
+    ("anneal 3_1 --from {file}", r"--from .*afile: unknown chain file suffix ''", False),
+    ("anneal 3_1 --from /proc/x", r"--from /proc/x: unknown chain file suffix", False),
+    ("anneal 3_1 --from {ck}", r"--from .*ck: is a folder; give a chain file", False),
+    ("anneal 3_1 --from {bad}/dir.vect", r"--from .*dir\.vect: is a folder", False),
+    ("anneal 3_1 --from {bad}/empty.xyz", r"--from .*empty\.xyz: empty file", False),
+    ("anneal 3_1 --from {bad}/junk.vect", r"--from .*: a VECT file starts with 'VECT'", False),
+    ("anneal 3_1 --from {bad}/junk.npz", r"--from .*: not an npz archive", False),
+    ("anneal 3_1 --from {bad}/binary.xyz", r"--from .*: not a text file", False),
+    ("anneal 3_1 --from {bad}/nan.xyz", r"--from .*: non-finite coordinates", False),
+    ("anneal 3_1 --from {bad}/two.xyz", r"--from .*: a closed chain needs at least 3 beads",
+     False),
+    ("anneal 3_1 --from {data}/4.1.vect", r"the curve is 4_1, not 3_1", False),
+    # --- atlas --------------------------------------------------------------------------------
+    ("atlas", r"give --max-crossings K .* or --knots", False),
+    ("atlas --max-crossings 0", r"--max-crossings must be an integer in \[3, 13\], got 0", True),
+    ("atlas --max-crossings 2", r"--max-crossings must be an integer in \[3, 13\]", False),
+    ("atlas --max-crossings 14", r"--max-crossings must be an integer in \[3, 13\]", False),
+    ("atlas --max-crossings -1", r"--max-crossings must be an integer in \[3, 13\]", False),
+    ("atlas --max-crossings x", r"Invalid value for '--max-crossings'", False),
+    ("atlas --knots ''", r"--knots must be knot names separated by commas", True),
+    ("atlas --knots ,,", r"--knots must be knot names separated by commas", False),
+    ("atlas --knots nonsense", r"unknown knot 'nonsense'", False),
+    ("atlas --knots 0_1", r"the unknot has no knotted ground state", False),
+    ("atlas --knots 5_1 --max-crossings 3", r"5_1 has 5 crossings, more than", False),
+    ("atlas --knots 3_1 --models ''", r"--models must be bead and/or tube", False),
+    ("atlas --knots 3_1 --models soft", r"--models must be bead and/or tube, separated by "
+     r"commas, got 'soft'", True),
+    ("atlas --knots 3_1 --models bead,soft", r"--models must be bead and/or tube", False),
+    ("atlas --knots 3_1 --budget huge", r"--budget must be one of tiny, small, default, full",
+     True),
+    ("atlas --knots 3_1 --budget ''", r"--budget must be one of", False),
+    ("atlas --knots 3_1 --out ''", r"--out must name a folder, got ''", False),
+    ("atlas --knots 3_1 --out {file}", r"--out .*: exists and is not a folder", False),
+    ("atlas --knots 3_1 --out {file}/sub", r"--out .*: cannot write there", False),
+    ("atlas --knots 3_1 --out /proc/x", r"--out /proc/x: cannot write there", False),
+    ("atlas --knots 3_1 --db {out}/x.db --out {file}", r"--out .*: exists and is not a folder",
+     False),
+    ("atlas --knots 3_1 --db ''", r"--db must name a file, got ''", False),
+    ("atlas --knots 3_1 --db {ck}", r"--db .*ck is a folder; give the path of a file", False),
+    ("atlas --knots 3_1 --db {file}/x.db", r"--db .*: cannot write there", False),
+    ("atlas --knots 3_1 --db /proc/x.db", r"--db /proc/x\.db: cannot write there", False),
+    ("atlas --knots 3_1 --db {file}", r"afile is not an SQLite database", False),
+    ("atlas --knots 3_1 --scheduler ''", r"--scheduler must be a scheduler address", False),
+    ("atlas --knots 3_1 --scheduler nonsense", r"--scheduler must be a scheduler address such "
+     r"as tcp://host:8786, got 'nonsense'", True),
+    ("atlas --knots 3_1 --scheduler tcp://", r"--scheduler must be a scheduler address", False),
+    ("atlas --knots 3_1 --scheduler tcp://localhost:8786 --workers 2",
+     r"--workers is for the local cluster", False),
+    ("atlas --knots 3_1 --workers 0", r"--workers must be an integer in \[1, 1,024\], got 0",
+     True),
+    ("atlas --knots 3_1 --workers -1", r"--workers must be an integer", False),
+    ("atlas --knots 3_1 --workers 100000", r"--workers must be an integer", False),
+    ("atlas --knots 3_1 --workers x", r"Invalid value for '--workers'", False),
+    ("atlas --knots 3_1 --w nan", r"--w must be a finite number in \(0, 1\), got nan", True),
+    ("atlas --knots 3_1 --w inf", r"--w must be a finite number in \(0, 1\)", False),
+    ("atlas --knots 3_1 --w 0", r"--w must be a finite number in \(0, 1\)", False),
+    ("atlas --knots 3_1 --w -1", r"--w must be a finite number in \(0, 1\)", False),
+    ("atlas --knots 3_1 --w 1e300", r"--w must be a finite number in \(0, 1\)", False),
+    ("atlas --knots 3_1 --w x", r"Invalid value for '--w'", False),
+    ("atlas --knots 3_1 --models bead --w 0.5", r"--w is the tube diameter: add tube", False),
+    ("atlas --knots 3_1 --replicas 0", r"--replicas must be an integer in \[1, 1,000\]", True),
+    ("atlas --knots 3_1 --replicas -1", r"--replicas must be an integer", False),
+    ("atlas --knots 3_1 --replicas 1.5", r"--replicas must be an integer", False),
+    ("atlas --knots 3_1 --replicas 100000", r"--replicas must be an integer", False),
+    ("atlas --knots 3_1 --replicas x", r"Invalid value for '--replicas'", False),
+    ("atlas --knots 3_1 --moves 0", r"--moves must be an integer in \[1,000", False),
+    ("atlas --knots 3_1 --moves 10", r"--moves must be an integer in \[1,000", False),
+    ("atlas --knots 3_1 --moves -1", r"--moves must be an integer", False),
+    ("atlas --knots 3_1 --moves 1e23", r"--moves must be an integer in \[1,000, "
+     r"1,000,000,000,000\], got 100000000000000000000000", True),
+    ("atlas --knots 3_1 --moves nan", r"--moves must be an integer", False),
+    ("atlas --knots 3_1 --moves lots", r"Invalid value for '--moves'", False),
+    ("atlas --knots 3_1 --max-replicas 0", r"--max-replicas must be an integer in \[4, 1,000\]",
+     True),
+    ("atlas --knots 3_1 --max-replicas 1", r"--max-replicas must be an integer in \[4, 1,000\]",
+     False),
+    ("atlas --knots 3_1 --max-replicas 100000", r"--max-replicas must be an integer", False),
+    ("atlas --knots 3_1 --max-replicas nan", r"--max-replicas must be an integer", False),
+    ("atlas --knots 3_1 --seed -1", r"--seed must be an integer in \[0, ", True),
+    ("atlas --knots 3_1 --seed 99999999999999999999999", r"--seed must be an integer", False),
+    ("atlas --knots 3_1 --seed x", r"Invalid value for '--seed'", False),
     ("bogus-command", r"No such command 'bogus-command'", True),
 ]
 
 CHECKPOINTS = {"empty": b"", "junk": b"junk, not a checkpoint\n",
                "truncated": b"PK\x03\x04" + bytes(200)}
 
+# curve files that cannot be read (identify, resample, relax, anneal --from)
+BAD_CURVES = {"empty.xyz": b"", "junk.vect": b"junk\n", "junk.json": b'{"a": 1}\n',
+              "junk.npz": b"junk, not an archive\n", "binary.xyz": bytes(range(256)),
+              "nan.xyz": b"3\na NaN vertex\nC 0 0 0\nC nan 0 0\nC 1 1 0\n",
+              "two.xyz": b"2\ntwo vertices\nC 0 0 0\nC 1 0 0\n",
+              "same.xyz": b"4\none vertex\n" + b"C 0 0 0\n" * 4}
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "curves" / "ridgerunner"
+
 
 def _fixtures(root: Path) -> dict[str, str]:
-    """An existing file, bad checkpoints (one folder per kind), and a folder that does not
-    exist yet; returns the placeholders."""
+    """An existing file, bad checkpoints (one folder per kind), bad curve files, and a folder
+    that does not exist yet; returns the placeholders."""
     fx = root / "fixtures"
     fx.mkdir()
     (fx / "afile").write_text("not a folder\n")
@@ -212,7 +398,11 @@ def _fixtures(root: Path) -> dict[str, str]:
         (fx / "ck" / kind).mkdir(parents=True)
         (fx / "ck" / kind / "replica_0.ckpt.npz").write_bytes(data)
     (fx / "ck" / "folder" / "replica_0.ckpt.npz").mkdir(parents=True)
-    return {"{file}": str(fx / "afile"), "{ck}": str(fx / "ck"), "{out}": str(root / "new" / "out")}
+    (fx / "bad" / "dir.vect").mkdir(parents=True)  # a folder named like a curve file
+    for name, data in BAD_CURVES.items():
+        (fx / "bad" / name).write_bytes(data)
+    return {"{file}": str(fx / "afile"), "{ck}": str(fx / "ck"), "{bad}": str(fx / "bad"),
+            "{data}": str(DATA), "{out}": str(root / "new" / "out")}
 
 
 def _snapshot(folder: Path) -> dict[str, bytes | None]:
@@ -262,8 +452,11 @@ def test_every_option_of_every_command_is_probed():
         for pname in inspect.signature(cmd.callback).parameters:
             ann = hints[pname]
             opts = [m for m in getattr(ann, "__metadata__", ()) if type(m).__name__ == "OptionInfo"]
-            if not opts or typing.get_args(ann)[0] is bool:
-                continue  # an argument (probed through the knot names) or a flag
+            base = typing.get_args(ann)[0] if opts else None
+            if not opts or set(typing.get_args(base) or (base,)) <= {bool, type(None)}:
+                # an argument (probed through the knot names) or a flag: bool, or bool | None
+                # (a pair such as --closed/--open, unset by default)
+                continue
             o = opts[0]  # typer.Option("--out", ...) keeps the name as its default
             decls = [d for d in (*(o.param_decls or ()), o.default)
                      if isinstance(d, str) and d.startswith("--")]

@@ -105,21 +105,30 @@ def anneal(
     if m_max is not None and not 1 <= m_max <= beads - 3:
         raise UserError(f"--m-max must be an integer in [1, {beads - 3}] (N − 3 for --beads "
                         f"{beads}), got {m_max}")
-    # every input is checked (and the folders claimed) before any work
-    checkpoint = claim_checkpoint(checkpoint, resume)
-    out_dir = prepare_out(out_dir, overwrite)
     initial = None
     if from_file is not None:
+        from stiffknots.errors import ChainFormatError
         from stiffknots.formats import load
 
-        initial = load(from_file)
+        if not from_file.strip():
+            raise UserError("--from must name a curve file, got ''")
+        try:
+            initial = load(from_file)
+        except ChainFormatError as exc:
+            raise UserError(f"--from {exc}") from None
         if not initial.closed:
             raise UserError(f"--from {from_file}: the curve was read as open; anneal takes a "
                             "closed curve (a knot)")
+    # every input is checked (and the folders claimed) before any work
+    checkpoint = claim_checkpoint(checkpoint, resume)
+    out_dir = prepare_out(out_dir, overwrite)
     problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                            schedule=sch, params=params, checkpoint_dir=checkpoint,
                            resume=resume, start=start, rounds=rounds, initial=initial,
                            polish=polish)
+    if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
+        for rnd in range(rounds):
+            V.checkpoints(problem.jobs(first=rnd * replicas))
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
                          disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)

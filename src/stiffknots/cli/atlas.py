@@ -25,6 +25,7 @@ from stiffknots.cli.app import (
     JsonOpt,
     SeedOpt,
     UserError,
+    count,
     dump,
     err,
     out,
@@ -134,13 +135,14 @@ def atlas(
     w: Annotated[float | None, typer.Option(
         help="Tube diameter of the tube model (bond units; default 1/√2).")] = None,
     replicas: Annotated[int | None, typer.Option(
-        help="Replicas per knot and model instead of the budget's.")] = None,
+        help="Replicas per knot and model instead of the budget's.", parser=count)] = None,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica instead of the budget's.")] = None,
+        help="Attempted moves per replica instead of the budget's (3e7 works too).",
+        parser=count)] = None,
     max_replicas: Annotated[int | None, typer.Option(
         help="Add replicas, 2 at a time, to every knot and model whose ground state has not "
-             "converged, up to this many in all (default: the budget's; none added).")
-    ] = None,
+             "converged, up to this many in all (default: the budget's; none added).",
+        parser=count)] = None,
     seed: SeedOpt = 0,
     json_: JsonOpt = False,
 ) -> None:
@@ -155,8 +157,8 @@ def atlas(
     if max_crossings is None and knots is None:
         raise UserError("give --max-crossings K (every prime knot through K crossings) or "
                         "--knots 3_1,4_1,...")
-    # every input is checked before any work
-    names = resolve_knots(_knot_list(knots), max_crossings)
+    # every input is checked before any work; the knot names (the catalogue: seconds) last
+    knot_list = _knot_list(knots)
     mods = parse_models(models, w=w)
     if w is not None and "tube" not in [m.name for m in mods]:
         raise UserError("--w is the tube diameter: add tube to --models")
@@ -170,6 +172,7 @@ def atlas(
         scheduler = scheduler_address(scheduler)
         if workers is not None:
             raise UserError("--workers is for the local cluster; a --scheduler has its own")
+    names = resolve_knots(knot_list, max_crossings)
     db = prepare_file(db, "--db")
     out_dir = prepare_folder(out_dir, "--out")
     command = "stiffknots " + " ".join(shlex.quote(a) for a in sys.argv[1:])

@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from stiffknots.cli.app import JsonOpt, UserError, dump, fmt, out
+from stiffknots.cli.app import JsonOpt, ReplicasOpt, UserError, count, dump, fmt, out
 
 FileArg = Annotated[Path, typer.Argument(
     help="A curve: .xyz, .txt/.dat/.csv/.tsv (x y z), .json, .npz/.npy, .obj (ElasticKnots), "
@@ -119,17 +119,17 @@ def resample(
 ) -> None:
     """Resample a closed curve into N equal unit bonds that keep its knot type (checked)."""
     from stiffknots.cli.app import prepare_file
-    from stiffknots.formats import READ_SUFFIXES, closure_note, save
+    from stiffknots.formats import check_readable, closure_note, save
     from stiffknots.knots.resample import resample as _resample
     from stiffknots.problems import validate as V
 
     V.beads(beads)
+    if dest.is_dir():
+        raise UserError(f"DEST {dest} is a folder; give the path of a file")
     if dest.suffix.lower() not in (".xyz", ".json", ".npz", ".obj", ".vect"):
         raise UserError(f"{dest}: unknown suffix {dest.suffix!r}; use .xyz, .json, .npz, .obj "
                         "or .vect")
-    if file.suffix.lower() not in READ_SUFFIXES:
-        raise UserError(f"{file}: unknown suffix {file.suffix!r}; use one of "
-                        f"{', '.join(READ_SUFFIXES)}")
+    check_readable(file)
     prepare_file(dest, "DEST")  # checked before any work
     chain = _load(file, closed)
     if not chain.closed:
@@ -154,7 +154,8 @@ def resample(
 
 def relax(
     file: FileArg,
-    beads: Annotated[int, typer.Option(help="Number of beads N of the relaxed chain.")] = 150,
+    beads: Annotated[int, typer.Option(help="Number of beads N of the relaxed chain.",
+                                       parser=count)] = 150,
     exclusion: Annotated[str, typer.Option(
         help="bead (the paper's rule, d = 1/√2 bond) or tube (diameter w = (w/L)·N).")
     ] = "bead",
@@ -163,9 +164,9 @@ def relax(
     knot: Annotated[str | None, typer.Option(
         help="The knot's name, when the invariants cannot tell (a HOMFLY-PT tie).")] = None,
     moves: Annotated[int | None, typer.Option(
-        help="Monte Carlo moves per replica (default: 40 % of the annealing budget at N).")
-    ] = None,
-    replicas: Annotated[int, typer.Option(help="Independent replicas (all cores).")] = 2,
+        help="Monte Carlo moves per replica (default: 40 % of the annealing budget at N; "
+             "3e7 works too).", parser=count)] = None,
+    replicas: ReplicasOpt = 2,
     seed: Annotated[int, typer.Option(help="Seed.")] = 0,
     closed: ClosedOpt = None,
     polish: Annotated[bool, typer.Option(
@@ -184,6 +185,7 @@ def relax(
         check_interrupted,
         emit,
         finish,
+        prepare_folder,
         prepare_out,
         width_of,
     )
@@ -194,6 +196,7 @@ def relax(
     if w_over_l is not None:
         exclusion = "tube"
     chain = _load(file, closed)
+    prepare_folder(out_dir, "--out")  # writable (created now, removed if the command fails)
     problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
                     w_over_L=w_over_l, knot=knot, polish=polish)
     out_path = prepare_out(out_dir, overwrite)

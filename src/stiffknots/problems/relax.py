@@ -86,6 +86,16 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
                              "tension use `stiffknots open`")
     V.beads(beads)
     V.choice("exclusion", exclusion, ("bead", "tube"))
+    # every parameter is checked before the curve is named and resampled (seconds of work)
+    if exclusion == "tube":
+        if w_over_L is None:
+            raise InvalidParameter("w_over_L", None, "given for the tube model")
+        V.number("w_over_L", w_over_L, 0, 1 / 8, lo_open=True)
+        if w_over_L * beads >= 1:
+            raise InvalidParameter("w_over_L", w_over_L, f"below 1/N = {1 / beads:.3g}",
+                                   f"the tube must be thinner than a bond at N = {beads}")
+    if knot is not None:
+        knot = _knot_name(knot)
     naming = identify_details(chain.coords, closed=True).as_dict()
     name = naming.get("knot")
     if knot is not None:
@@ -100,13 +110,7 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
                              + "); give it with --knot")
     x = resample(chain, beads)
     if exclusion == "tube":
-        if w_over_L is None:
-            raise InvalidParameter("w_over_L", None, "given for the tube model")
-        V.number("w_over_L", w_over_L, 0, 1 / 8, lo_open=True)
         w = w_over_L * beads
-        if w >= 1:
-            raise InvalidParameter("w_over_L", w_over_L, f"below 1/N = {1 / beads:.3g}",
-                                   f"the tube must be thinner than a bond at N = {beads}")
         params = MoveParams(exclusion="tube", w=w)
         have, need = x.min_segment_distance(), w
     else:
@@ -119,6 +123,18 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
                              f"({have:.3g} < {need:.3g} bond lengths between non-adjacent "
                              f"{'beads' if exclusion == 'bead' else 'segments'}); {fix}")
     return x, name, naming, params.for_beads(beads)
+
+
+def _knot_name(knot: str) -> str:
+    """``--knot``: a catalogue name (any usual spelling) or a composite ``a#b`` of them."""
+    from stiffknots.knots.catalogue import get_knot
+
+    text = str(knot).strip()
+    if not text:
+        raise InvalidParameter("knot", knot, "a knot name such as 3_1 or 5_2")
+    # UnknownKnotError: one line with the closest names
+    names = [get_knot(part.strip().lstrip("+-")).name for part in text.split("#")]
+    return names[0] if len(names) == 1 else text
 
 
 class Relax(Problem):
@@ -135,6 +151,8 @@ class Relax(Problem):
         self.replicas = V.replicas(replicas)
         self.seed = V.seed(seed)
         self.beads = V.beads(beads)
+        if moves is not None:
+            moves = V.moves(moves)
         self.polish = bool(polish)
         x, self.knot_name, self.naming, params = prepare_curve(chain, beads, exclusion,
                                                                 w_over_L, knot)
