@@ -297,6 +297,18 @@ def test_kill_9_of_the_parent_ends_its_workers(tmp_path, runs):
     assert until(lambda: not any(alive(p) for p in pids), 10), [p for p in pids if alive(p)]
 
 
+def test_sigterm_stops_a_run_after_its_knot_checks(tmp_path, runs):
+    # topoly's HOMFLY-PT code installs a C handler for SIGTERM; before the fix, once the start's
+    # polynomial was computed `kill PID` was swallowed and the run went on for its whole budget
+    r = start(runs, ["anneal", "3_1", "--moves", "50000000", "--replicas", "2"], tmp_path)
+    assert until(lambda: len(workers(r.p.pid)) == 2, 120), r.err
+    time.sleep(1.0)  # the workers run their replicas: every knot check of the start is done
+    pids = workers(r.p.pid)
+    os.kill(r.p.pid, signal.SIGTERM)
+    assert r.wait(timeout=20) != 0
+    assert until(lambda: not any(alive(p) for p in pids), 10), [p for p in pids if alive(p)]
+
+
 # -- two runs ----------------------------------------------------------------------------------
 
 

@@ -1,5 +1,7 @@
 """Knot identification (stiffknots.knots.identify) and its agreement with the embeddings."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,7 @@ from stiffknots.knots.embedding import (
 from stiffknots.knots.identify import (
     close_open_chain_along_z,
     crossing_number_of_name,
+    homfly_code,
     identify,
     normalize_name,
     verify_knot,
@@ -136,3 +139,17 @@ def test_minimal_embedding_keeps_knot_type(name, word):
     assert n <= 150
     ok, found = verify_knot(embed_braid(word, n_beads=n), name)
     assert ok, (name, n, found)
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc (Linux)")
+def test_topoly_leaves_sigterm_at_its_default():
+    """topoly's compiled code installs a SIGTERM handler; identify puts the default back, so
+    that `kill PID` still stops a run (it used to be swallowed)."""
+    import signal
+
+    t = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    x = np.c_[np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)]
+    homfly_code(x)
+    caught = next(int(line.split()[1], 16) for line in Path("/proc/self/status").read_text()
+                  .splitlines() if line.startswith("SigCgt:"))
+    assert not caught >> (signal.SIGTERM - 1) & 1

@@ -69,6 +69,7 @@ import contextlib
 import io
 import os
 import re
+import signal
 import threading
 from dataclasses import dataclass
 
@@ -212,9 +213,28 @@ def _quiet():
     topoly's compiled extension (it then closes a descriptor it does not own).  In all our
     tests the compiled code printed nothing.
     """
-    with _LOCK, _keep_stdin():
+    with _LOCK, _keep_stdin(), _keep_sigterm():
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             yield
+
+
+@contextlib.contextmanager
+def _keep_sigterm():
+    """Give SIGTERM its disposition back after a topoly call.
+
+    topoly's compiled HOMFLY-PT code installs a C handler for SIGTERM (``sigaction``) and
+    leaves it: afterwards ``kill PID`` no longer stopped a run (the handler swallows the
+    signal), while Python still reported the default. The disposition Python knows is
+    reinstalled after the call (in the main thread, the only one that may set handlers; in
+    other threads :func:`homfly_code` runs topoly in a forked child anyway).
+    """
+    main = threading.current_thread() is threading.main_thread()
+    saved = signal.getsignal(signal.SIGTERM) if main else None
+    try:
+        yield
+    finally:
+        if main and saved is not None:
+            signal.signal(signal.SIGTERM, saved)
 
 
 def _topoly():
