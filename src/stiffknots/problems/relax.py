@@ -102,11 +102,7 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
     if exclusion == "tube":
         if w_over_L is None:
             raise InvalidParameter("w_over_L", None, "given for the tube model")
-        V.number("w_over_L", w_over_L, 0, 1 / 8, lo_open=True)
-        w = w_over_L * beads
-        if w >= 1:
-            raise InvalidParameter("w_over_L", w_over_L, f"below 1/N = {1 / beads:.3g}",
-                                   f"the tube must be thinner than a bond at N = {beads}")
+        w = V.w_over_L(w_over_L, beads) * beads
         params = MoveParams(exclusion="tube", w=w)
         have, need = x.min_segment_distance(), w
     else:
