@@ -15,7 +15,7 @@ the minimum energy ``eps*_w`` of a tube of width ``w`` as ``w/L -> 0``; ``eps*_w
    changes with ``w`` is found; the shape of each point is reported);
 3. corrects each point for the discretisation, ``eps = eps_N (1 + k/N^2)`` with
    ``k = eps_N / 6`` (the regular polygon's leading term; with the ``default`` budget ``k``
-   is measured on the knot itself by relaxing the thinnest point again at 1.5 N), the
+   is measured on the knot itself by relaxing the thinnest point again at 2 N), the
    correction's uncertainty being a systematic error common to all points;
 4. fits ``eps(w) = eps* + a w^p`` (:func:`stiffknots.analysis.extrapolate.extrapolate`) to the
    points of the thinnest point's shape and states ``eps*`` with an error bar: fit
@@ -38,10 +38,12 @@ from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from stiffknots._version import __version__
 from stiffknots.analysis.extrapolate import extrapolate
 from stiffknots.engine.params import MoveParams
-from stiffknots.errors import InvalidParameter
+from stiffknots.errors import InvalidParameter, UserInputError
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import default_moves, solve
 
@@ -60,7 +62,7 @@ class Budget:
     relax_factor : relaxation moves of a continuation step, same unit.
     rounds, replicas : the convergence rule of each annealing (rounds of replicas).
     anneal_each : anneal every width afresh too (else only the widest one).
-    measure_k : measure the discretisation coefficient ``k`` at the thinnest width (1.5 N).
+    measure_k : measure the discretisation coefficient ``k`` at the thinnest width (2 N).
     """
 
     widths: tuple[float, ...]
@@ -244,10 +246,23 @@ def thin_limit(knot: str, budget: str = "small", seed: int = 0, *,
     disc: dict[str, Any] = {"rule": "eps = eps_N (1 + k/N^2), k = eps/6 (regular polygon)",
                             "k_rule": k_rule, "beads": n}
     k_used, k_err = k_rule, K_UNCERTAINTY[kind] * k_rule
-    n2 = int(round(1.5 * n))
-    if b.measure_k and thin["w_over_L"] * n2 < 1:
-        r2 = relax_at(chains[f"{thin['w_over_L']:g}"], thin["w_over_L"], n2,
-                      f"relax at N = {n2} (discretisation)")
+    # 2N: every bond cut at its midpoint (and the chain scaled by 2) is the same curve, so
+    # it keeps the tube exactly (a resampling to another N need not: the polished chain
+    # touches its tube); the width is taken 1e-9 thinner against rounding
+    n2 = 2 * n
+    r2 = None
+    if b.measure_k and thin["w_over_L"] * n2 < 1 and n2 <= V.MAX_BEADS:
+        x = np.asarray(chains[f"{thin['w_over_L']:g}"], dtype=float)
+        x2 = np.empty((2 * len(x), 3))
+        x2[0::2] = 2 * x
+        x2[1::2] = x + np.roll(x, -1, axis=0)
+        try:
+            r2 = relax_at(x2, thin["w_over_L"] * (1 - 1e-9), n2,
+                          f"relax at N = {n2} (discretisation)")
+        except UserInputError as exc:  # the resampled chain did not fit: k from the rule
+            disc["k_measurement_failed"] = str(exc)
+            say(f"{name}: discretisation not measured ({exc}); k = ε/6")
+    if r2 is not None:
         if r2.interrupted:
             raise KeyboardInterrupt
         e1, e2 = thin["epsilon_raw"], r2.best.epsilon
