@@ -67,3 +67,16 @@ def test_three_points_hold_the_exponent():
 def test_bad_series_rejected(bad):
     with pytest.raises(ValueError):
         extrapolate(bad["w"], bad["eps"])
+
+
+def test_fit_range_term_flags_a_series_not_yet_one_power_law():
+    """ε* + a w^½ + b w: the local exponent drifts; leaving out the widest points moves the
+    limit, and the error says so (covers the truth within 2σ)."""
+    w = np.array([0.004, 0.003, 0.002, 0.0014, 0.001, 0.0007, 0.0005, 0.00035, 0.00025])
+    eps = EPS + 300 * w**0.5 - 2000 * w
+    r = extrapolate(w, eps, 1e-3)
+    assert r.range_error > 0 and len(r.range_fits) == 4
+    assert abs(r.epsilon - EPS) <= 2 * r.error
+    # a pure power law: the range term stays at the noise level
+    r2 = extrapolate(w, EPS + 700 * w, 1e-3)
+    assert r2.range_error < 0.01 and r2.epsilon == pytest.approx(EPS, abs=0.01)

@@ -30,7 +30,11 @@ The error of ``eps*`` (one standard error) combines in quadrature
   least squares, after the scaling above);
 * the exponent's uncertainty: the largest shift of ``eps*(p)`` over the exponents whose
   profile ``chi^2(p) <= chi^2_min + 1`` (scaled ``chi^2``), i.e. the ``1 sigma`` profile
-  interval of ``p``.
+  interval of ``p``;
+* the fit range (six points or more): the largest shift of ``eps*`` when the widest points
+  are left out one by one, down to :data:`MIN_RANGE_POINTS` points. A series that is not yet
+  one power law (its local exponent drifts) moves its limit as the range shrinks; this term
+  says so where the statistical error would not.
 
 Tests (``tests/analysis/test_extrapolate.py``) check on synthetic series of known limit and
 Gaussian noise that the ``2 sigma`` bar covers the truth in at least 90 % of 200 series.
@@ -51,6 +55,8 @@ __all__ = ["DEFAULT_P", "P_MIN", "P_MAX", "PowerFit", "ThinLimitFit", "fit_power
 DEFAULT_P = 1.0
 #: range of the exponent scanned
 P_MIN, P_MAX = 0.3, 3.0
+#: the fewest points of a sub-series in the fit-range term
+MIN_RANGE_POINTS = 5
 #: alternatives always reported (fixed exponents)
 ALTERNATIVE_P = (2.0 / 3.0, 1.0, 4.0 / 3.0, 2.0)
 
@@ -93,7 +99,8 @@ class ThinLimitFit:
     p, p_range : the exponent used and its ``1 sigma`` profile interval (``None`` when held).
     p_free : whether ``p`` was fitted (at least four points) or held at :data:`DEFAULT_P`.
     a : the amplitude at ``p``.
-    stat_error, exponent_error : the two parts of ``error``.
+    stat_error, exponent_error, range_error : the parts of ``error``.
+    range_fits : ``(points, eps*)`` of the sub-series without the widest points.
     scale : the factor applied to the points' ``sigma`` (``>= 1``).
     chi2, dof : of the best fit, with the ``sigma`` as given.
     alternatives : fits at the fixed exponents :data:`ALTERNATIVE_P`.
@@ -111,6 +118,8 @@ class ThinLimitFit:
     chi2: float
     dof: int
     alternatives: list[PowerFit] = field(default_factory=list)
+    range_error: float = 0.0
+    range_fits: list[tuple[int, float]] = field(default_factory=list)
 
     def model(self, w) -> np.ndarray:
         """``eps* + a w^p`` at the widths ``w``."""
@@ -122,7 +131,8 @@ class ThinLimitFit:
             "epsilon": self.epsilon, "error": self.error, "p": self.p,
             "p_range": list(self.p_range) if self.p_range is not None else None,
             "p_free": self.p_free, "a": self.a, "stat_error": self.stat_error,
-            "exponent_error": self.exponent_error, "sigma_scale": self.scale,
+            "exponent_error": self.exponent_error, "range_error": self.range_error,
+            "range_fits": [list(r) for r in self.range_fits], "sigma_scale": self.scale,
             "chi2": self.chi2, "dof": self.dof,
             "alternatives": [f.as_dict() for f in self.alternatives],
         }
@@ -227,7 +237,16 @@ def extrapolate(w: Sequence[float], eps: Sequence[float], sigma=None, *,
     idx = np.flatnonzero(ok)
     shift = max(abs(fits[i].epsilon - best.epsilon) for i in idx)
     stat = best.error * s
-    return ThinLimitFit(epsilon=best.epsilon, error=math.hypot(stat, shift), p=best.p,
-                        p_range=(float(grid[idx.min()]), float(grid[idx.max()])), p_free=True,
-                        a=best.a, stat_error=stat, exponent_error=shift, scale=s,
-                        chi2=best.chi2, dof=dof, alternatives=alternatives)
+    # the fit range: leave out the widest points, down to MIN_RANGE_POINTS
+    order = np.argsort(w)[::-1]
+    range_fits: list[tuple[int, float]] = []
+    for m in range(n - 1, MIN_RANGE_POINTS - 1, -1):
+        keep = np.sort(order[n - m:])
+        sub = extrapolate(w[keep], eps[keep], sigma[keep], p=p, p_grid=grid)
+        range_fits.append((m, sub.epsilon))
+    rng = max((abs(e - best.epsilon) for _, e in range_fits), default=0.0)
+    return ThinLimitFit(epsilon=best.epsilon, error=math.sqrt(stat**2 + shift**2 + rng**2),
+                        p=best.p, p_range=(float(grid[idx.min()]), float(grid[idx.max()])),
+                        p_free=True, a=best.a, stat_error=stat, exponent_error=shift,
+                        scale=s, chi2=best.chi2, dof=dof, alternatives=alternatives,
+                        range_error=rng, range_fits=range_fits)
