@@ -144,7 +144,9 @@ def _table(res) -> None:
     out.print(f"fit ε(w) = ε* + a (w/L)^p: p = {f['p']:.2f}{pr}, a = {f['a']:.4g}, "
               f"χ²/dof = {f['chi2']:.3g}/{f['dof']}", markup=False, highlight=False)
     out.print(f"thin limit w/L → 0 ({res['shape']}): ε* = {res['epsilon_thin']:.4f} ± "
-              f"{res['error']:.2g}", markup=False, highlight=False)
+              f"{res['error']:.2g} (fit: statistical {f['stat_error']:.2g}, exponent "
+              f"{f['exponent_error']:.2g}, fit range {f['range_error']:.2g}; discretisation "
+              f"{d['error']:.2g})", markup=False, highlight=False)
     s = res["structure"]
     if s is not None:
         out.print(f"structure route at w = 0: {s['name']} = {s['epsilon']:.6f}; difference "
