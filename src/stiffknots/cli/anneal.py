@@ -35,10 +35,24 @@ from stiffknots.cli.app import (
 )
 
 
+def _thin_beads(name: str, w_over_l: float) -> int:
+    """The N rule of ``--w-over-L`` (:func:`stiffknots.problems.validate.beads_for_width`)
+    with the knot's upper bound as the energy estimate."""
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.problems import validate as V
+    from stiffknots.theory.bounds import closed_bounds
+
+    k = get_knot(name)
+    b = closed_bounds(k.bridge_number, k.braid_index)
+    eps = b.upper if b.upper is not None else 4 * b.lower
+    return V.beads_for_width(w_over_l, eps)
+
+
 def anneal(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
-    beads: Annotated[int, typer.Option(help="Number of beads N (bond length 1).",
-                                       parser=count)] = 150,
+    beads: Annotated[int | None, typer.Option(
+        help="Number of beads N (bond length 1); default 150, or with --w-over-L the N rule "
+             "(discretisation error below 0.1 %).", parser=count, show_default=False)] = None,
     moves: Annotated[int | None, typer.Option(
         help="Attempted moves per replica (default: 30,000,000 at N = 150, scaled as N²; "
              "3e7 works too).", parser=count)] = None,
@@ -51,6 +65,10 @@ def anneal(
     exclusion: Annotated[str, typer.Option(help="bead (paper, d=1/√2) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model; default 1/√2).")
                  ] = None,
+    w_over_l: Annotated[float | None, typer.Option(
+        "--w-over-L", help="Tube diameter over length (sets --exclusion tube, w = (w/L)·N); "
+                           "without --beads, N = ⌈(ε/(6·0.001))^½⌉ with ε the knot's upper "
+                           "bound (discretisation error ≈ ε/(6N²) below 0.1 %).")] = None,
     schedule: Annotated[str, typer.Option(
         help="power (paper), geometric or tempering (replica exchange).")] = "power",
     t_start: Annotated[float | None, typer.Option(
@@ -85,7 +103,15 @@ def anneal(
     from stiffknots.problems.base import solve
     from stiffknots.problems.closed import ClosedAnneal
 
-    beads, replicas, seed = V.beads(beads), V.replicas(replicas), V.seed(seed)
+    replicas, seed = V.replicas(replicas), V.seed(seed)
+    if w_over_l is not None:
+        if w is not None:
+            raise UserError("--w and --w-over-L both set the tube's diameter; give one")
+        exclusion = "tube"  # as `relax --w-over-L`
+        if beads is None:
+            beads = _thin_beads(name, w_over_l)
+        w = V.w_over_L(w_over_l, V.beads(beads)) * beads
+    beads = V.beads(150 if beads is None else beads)
     if moves is not None:
         moves = V.moves(moves)
     rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)

@@ -5,7 +5,17 @@ from __future__ import annotations
 
 import typer
 
-from stiffknots.cli import anneal, atlas, catalogue, curves, db, open, studies, tightest
+from stiffknots.cli import (
+    anneal,
+    atlas,
+    catalogue,
+    curves,
+    db,
+    open,
+    studies,
+    thin_limit,
+    tightest,
+)
 from stiffknots.cli.app import Interrupted, app, err, release_folders, work_starts_note
 from stiffknots.errors import InvalidParameter, UserInputError, WorkerError
 
@@ -20,6 +30,7 @@ for _name, _command in (
         ("anneal", anneal.anneal),
         ("open", open.open_knot),
         ("tightest", tightest.tightest),
+        ("thin-limit", thin_limit.thin_limit),
         ("paper", studies.paper),
         ("atlas", atlas.atlas),
         ("bench", studies.bench),
@@ -49,7 +60,7 @@ def _usage_line(e) -> str:
 
 
 # commands that run the numba kernels: on a cold cache they say first what takes time
-_ENGINE_COMMANDS = {"anneal", "open", "tightest", "paper", "bench", "relax"}
+_ENGINE_COMMANDS = {"anneal", "open", "tightest", "paper", "bench", "relax", "thin-limit"}
 
 
 def _note_cold_cache() -> None:

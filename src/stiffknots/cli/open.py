@@ -60,6 +60,10 @@ def open_knot(
                          ] = "tube",
     w: Annotated[float | None, typer.Option(
         help="Tube diameter in bond lengths (tube model; default 0.05).")] = None,
+    w_over_l: Annotated[float | None, typer.Option(
+        "--w-over-L", help="Tube diameter over the chain's length (sets --exclusion tube; "
+                           "w = (w/L)·N with N the beads of each chain, set by the embedding "
+                           "or --beads).")] = None,
     m_max: Annotated[int | None, typer.Option(
         help="Largest sub-chain of a crankshaft move (default: N/2; at most N − 4).")
                      ] = None,
@@ -80,9 +84,14 @@ def open_knot(
 
     moves, replicas, seed = V.moves(moves), V.replicas(replicas), V.seed(seed)
     choice("--ensemble", ensemble, ("extension", "force"))
+    if w_over_l is not None:
+        if w is not None:
+            raise UserError("--w and --w-over-L both set the tube's diameter; give one")
+        exclusion = "tube"  # as `relax --w-over-L`
+        V.number("w_over_L", w_over_l, 0, V.MAX_W_OVER_L, lo_open=True)
     choice("--exclusion", exclusion, ("bead", "tube"))
     tube_only(w, exclusion)
-    if exclusion == "tube" and w is None:
+    if exclusion == "tube" and w is None and w_over_l is None:
         from stiffknots.problems.open_extension import DEFAULT_OPEN_W
 
         w = DEFAULT_OPEN_W
@@ -95,12 +104,15 @@ def open_knot(
     else:
         problems, follow = _extension_problems(name, les or [80.0], forces, beads, moves,
                                                replicas, seed, params)
+    for p in problems:
+        _set_width(p, w_over_l)
+    params = problems[0].settings.params  # the width reported is the first chain's
     n_min = min(p.beads for p in problems)
     if m_max is not None and not 1 <= m_max <= n_min - 4:
         raise UserError(f"--m-max must be an integer in [1, {n_min - 4}] (N − 4 for the open "
                         f"chain of {n_min} beads), got {m_max}")
     out_dir = prepare_out(out_dir, overwrite)
-    results, stopped = _run(problems, follow, replicas, json_)
+    results, stopped = _run(problems, follow, replicas, json_, w_over_l)
     points = [_point(r) for r in results]
     res0, last = results[0], points[-1]
     summary = {
@@ -179,7 +191,23 @@ def _force_problems(name, forces, les, beads, moves, replicas, seed, params):
             for f in forces], []
 
 
-def _run(problems, follow, replicas, quiet):
+def _set_width(problem, w_over_l: float | None) -> None:
+    """``--w-over-L``: the tube of ``problem`` is ``w = (w/L)·N`` of its own chain (L = N
+    bonds), checked as ``relax --w-over-L`` (below one bond)."""
+    from dataclasses import replace
+
+    from stiffknots.problems import validate as V
+
+    if w_over_l is None:
+        return
+    n = problem.beads
+    st = problem.settings
+    st.params = replace(st.params, w=V.w_over_L(w_over_l, n) * n)
+    st.validate()
+    st.params.validate(n)
+
+
+def _run(problems, follow, replicas, quiet, w_over_l=None):
     """Solve every problem in turn with live progress; then the extension points that the
     forces in ``follow`` select (ε_e measured at the first point). Returns the results and
     the result that Ctrl-C stopped (None if none)."""
@@ -188,7 +216,8 @@ def _run(problems, follow, replicas, quiet):
 
     results = []
 
-    def one(p, label):
+    def one(p, label, w_over_l=None):
+        _set_width(p, w_over_l)
         with ReplicaProgress(label, replicas, disable=quiet) as bars:
             r = solve(p, on_replica_done=bars.done, on_progress=bars, isolate=True)
         if not results:
@@ -207,7 +236,8 @@ def _run(problems, follow, replicas, quiet):
     for f in follow:
         le = _selected_length(f, results[0].eps_e)
         r = one(OpenExtension(p0.knot_name, le, p0.settings.moves, p0.replicas, p0.seed,
-                              params=p0.settings.params), f"open {p0.knot_name} F = {f:g}")
+                              params=p0.settings.params), f"open {p0.knot_name} F = {f:g}",
+                w_over_l)
         r.requested_force = f
         if r.interrupted:
             return results, r

@@ -110,7 +110,9 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
                              + "); give it with --knot")
     x = resample(chain, beads)
     if exclusion == "tube":
-        w = w_over_L * beads
+        if w_over_L is None:
+            raise InvalidParameter("w_over_L", None, "given for the tube model")
+        w = V.w_over_L(w_over_L, beads) * beads
         params = MoveParams(exclusion="tube", w=w)
         have, need = x.min_segment_distance(), w
     else:

@@ -530,3 +530,41 @@ def plot_open_trend(points: Sequence[Mapping], fit: Mapping, ax=None, *,
     ax.set_xlim(0, None)
     ax.legend(fontsize=8)
     return ax
+
+
+def plot_thin_limit(result: Mapping, ax=None):
+    """ε*_w against w/L with the fit ε* + a (w/L)^p, the thin limit ε* ± error and the
+    structure route's value at w = 0 (§V A, §V B).
+
+    ``result``: the dict of :func:`stiffknots.studies.thin_limit.thin_limit`.
+    """
+    ax = _new_ax(ax, (6, 4.2))
+    pts = result["points"]
+    n = pts[0]["beads"] if pts else 0
+    for inside, mk, lab in ((True, "o", "fitted"), (False, "x", "other shape (not fitted)")):
+        sel = [p for p in pts if p.get("in_fit", True) == inside]
+        if sel:
+            ax.errorbar([p["w_over_L"] for p in sel], [p["epsilon"] for p in sel],
+                        yerr=[p["sigma"] for p in sel], fmt=mk, color="C0" if inside else "C3",
+                        label=f"ε*_w, N = {n} ({lab})", capsize=2)
+            for p in sel:
+                ax.annotate(p["shape"], (p["w_over_L"], p["epsilon"]),
+                            textcoords="offset points", xytext=(4, 4), fontsize=7)
+    fit, eps, err = result.get("fit"), result.get("epsilon_thin"), result.get("error")
+    wmax = max(p["w_over_L"] for p in pts) if pts else 1.0
+    if fit is not None and eps is not None:
+        xx = np.linspace(0, wmax * 1.05, 200)
+        ax.plot(xx, fit["epsilon"] + fit["a"] * xx ** fit["p"], "-", color="C0", lw=1,
+                label=f"fit ε* + a (w/L)^p, p = {fit['p']:.2f}")
+        ax.errorbar([0.0], [eps], yerr=[err], fmt="s", color="k", capsize=3,
+                    label=f"thin limit ε* = {eps:.4f} ± {err:.2g}")
+    s = result.get("structure")
+    if s is not None:
+        ax.axhline(s["epsilon"], color="C2", ls="--", lw=1,
+                   label=f"structure {s['name']} at w = 0: {s['epsilon']:.4f}")
+    ax.set_xlabel("w/L")
+    ax.set_ylabel("ε = E L / C")
+    ax.set_xlim(-0.02 * wmax, wmax * 1.08)
+    ax.set_title(f"{result.get('knot', '')}: thin limit (tube model)")
+    ax.legend(fontsize=7)
+    return ax
