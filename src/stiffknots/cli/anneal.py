@@ -173,11 +173,13 @@ def anneal(
         return
     t = Table(title=escape(f"{res.knot}, {width['text']}, {res.settings['moves']:,} "
                            "moves/replica"))
-    for col in ("replica", "seed", "start", "ε", "shape", "knot", "min seg dist", "acc single",
+    # the seeds (64-bit) are in --json and result.json: the table keeps to 80 columns, and ε
+    # and the replica are never cut
+    for col in ("replica", "start", "ε", "shape", "knot", "min seg dist", "acc single",
                 "acc multi", "s"):
-        t.add_column(col, justify="right")
+        t.add_column(col, justify="right", no_wrap=col in ("replica", "ε"))
     for r in res.replicas:
-        t.add_row(str(r.replica), str(r.seed), str(r.start), f"{r.epsilon:.4f}",
+        t.add_row(str(r.replica), str(r.start), f"{r.epsilon:.4f}",
                   r.observables["shape"],
                   escape(str(r.knot)) + (" ✓" if r.knot_verified else " ✗"),
                   f"{r.min_segment_distance:.3f}", f"{r.acceptance['single']['rate']:.3f}",
