@@ -36,22 +36,14 @@ from stiffknots.engine.driver import AnnealSettings
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter, UserInputError
+from stiffknots.problems import base
 from stiffknots.problems import validate as V
-from stiffknots.problems.base import (
-    Job,
-    Problem,
-    Replica,
-    ReplicaSet,
-    default_moves,
-    observe_shape,
-    solve,
-)
 
 D_BEAD = 1 / math.sqrt(2)
 
 
 @dataclass
-class RelaxResult(ReplicaSet):
+class RelaxResult(base.ReplicaSet):
     """The relaxed curve: replicas best (lowest ε) first, with the input's own ε."""
 
     problem: ClassVar[str] = "relax"
@@ -139,7 +131,7 @@ def _knot_name(knot: str) -> str:
     return names[0] if len(names) == 1 else text
 
 
-class Relax(Problem):
+class Relax(base.Problem):
     """Relax a user's curve; see :func:`relax`."""
 
     result_type = RelaxResult
@@ -165,21 +157,21 @@ class Relax(Problem):
         relax = Schedule(kind="geometric", t_start=sch.t_relax, t_end=sch.t_relax_end,
                          relax_fraction=0.0)
         self.settings = AnnealSettings(
-            moves=V.moves(round(0.4 * default_moves(beads)) if moves is None else moves),
+            moves=V.moves(round(0.4 * base.default_moves(beads)) if moves is None else moves),
             schedule=relax, params=params)
         self.settings.validate()
         self.code = start_code(self.knot_name, self.coords, True, "input")
         self._bounds = _bounds(self.knot_name)
 
-    def jobs(self, first: int = 0) -> list[Job]:
+    def jobs(self, first: int = 0) -> list[base.Job]:
         return self._replica_jobs(self.settings, lambda r: self.coords, lambda r: "input",
                                   lambda r: self.code, first=first)
 
-    def state_of(self, r: Replica) -> tuple[str, float]:
+    def state_of(self, r: base.Replica) -> tuple[str, float]:
         return r.observables["shape"], r.epsilon
 
-    def observe(self, r: Replica) -> None:
-        observe_shape(r, self.settings.params)
+    def observe(self, r: base.Replica) -> None:
+        base.observe_shape(r, self.settings.params)
 
     def bounds(self) -> dict:
         return self._bounds
@@ -231,4 +223,4 @@ def relax(chain: Chain | np.ndarray, beads: int = 150, moves: int | None = None,
         chain = Chain(chain, closed=True)
     problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
                     w_over_L=w_over_L, knot=knot, polish=polish)
-    return solve(problem, workers=workers, on_progress=on_progress)
+    return base.solve(problem, workers=workers, on_progress=on_progress)

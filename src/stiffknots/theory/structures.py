@@ -881,16 +881,18 @@ def circular_braid(i: int) -> Structure:
     u = np.linspace(0.0, 2.0 * np.pi, 401)
     # an ellipse with an out-of-plane wobble, through the origin with tangent +x
     crv = np.column_stack([1.6 * np.sin(u), 1.0 - np.cos(u), 0.3 * np.sin(2 * u) ** 2])
-    return Structure(
-        name=f"CB({i})",
-        description=f"circular braid: one closed line-braid of multiplicity {i}",
-        node_names=("P (a point on the line-braid)",),
-        node_guess=np.zeros((1, 3)),
-        dir_guess=np.array([[1.0, 0.0, 0.0]]),
-        arcs=(ArcSpec("braid", 0, 0, 0, 1, 0, 1, multiplicity=int(i), weight=1, guess=crv),),
-        fixed_nodes=(0,),
-        fixed_dirs=(0,),
-    )
+    return _one_node(f"CB({i})", f"circular braid: one closed line-braid of multiplicity {i}",
+                     "P (a point on the line-braid)",
+                     (ArcSpec("braid", 0, 0, 0, 1, 0, 1, multiplicity=int(i), weight=1,
+                              guess=crv),))
+
+
+def _one_node(name: str, description: str, node_name: str, arcs: tuple) -> Structure:
+    """A structure of arcs from and to one junction P, fixed at the origin with direction +x
+    (the gauge: a rigid motion moves nothing else)."""
+    return Structure(name=name, description=description, node_names=(node_name,),
+                     node_guess=np.zeros((1, 3)), dir_guess=np.array([[1.0, 0.0, 0.0]]),
+                     arcs=arcs, fixed_nodes=(0,), fixed_dirs=(0,))
 
 
 def _lemniscate(t: np.ndarray) -> np.ndarray:
@@ -979,16 +981,8 @@ def point_braid_loops(n: int) -> Structure:
         crv = side * y[:, None] * np.array([1.0, 0.0, 0.0]) + xx[:, None] * e1
         arcs.append(ArcSpec(f"loop {k + 1} ({'+' if side > 0 else '-'}a)", 0, 0, 0, side, 0,
                             -side, weight=1, guess=crv))
-    return Structure(
-        name=f"PBL({n})",
-        description=f"point-braid and {2 * n} loops",
-        node_names=("P (point-braid)",),
-        node_guess=np.zeros((1, 3)),
-        dir_guess=np.array([[1.0, 0.0, 0.0]]),
-        arcs=tuple(arcs),
-        fixed_nodes=(0,),
-        fixed_dirs=(0,),
-    )
+    return _one_node(f"PBL({n})", f"point-braid and {2 * n} loops", "P (point-braid)",
+                     tuple(arcs))
 
 
 #: The four arcs of the cage: (side of A's axis a, side of B's axis b) where each arc leaves.
