@@ -16,8 +16,8 @@ $(STAMP): pyproject.toml
 run: $(STAMP)  ## the main job on a small default budget
 	$(VENV)/bin/stiffknots paper --budget small --out results/paper --overwrite
 
-test: $(STAMP)  ## the default (fast) test suite; pytest exit 5 (no tests) fails
-	$(PY) -m pytest -m "not slow" -q
+test: $(STAMP)  ## the default (fast) test suite on both cores; pytest exit 5 (no tests) fails
+	$(PY) -m pytest -m "not slow" -q -n 2
 
 test-all: $(STAMP)  ## every test, slow ones included
 	$(PY) -m pytest -q
