@@ -37,6 +37,7 @@ import json
 import os
 import sqlite3
 import threading
+import time
 from collections import Counter, defaultdict
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
@@ -186,13 +187,7 @@ class Store:
             raise StoreError(f"cannot open the results database {path}: {e}") from None
         try:
             con.execute(f"PRAGMA busy_timeout = {int(self._timeout * 1000)}")
-            mode = con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
-            if str(mode).lower() != "wal":
-                raise StoreError(f"{path}: SQLite could not switch to WAL mode (journal mode "
-                                 f"{mode!r}); put the database on a local file system")
-            con.execute("PRAGMA synchronous = FULL")
-            con.execute("PRAGMA foreign_keys = ON")
-            self._init_schema(con)
+            self._setup(con)
         except sqlite3.DatabaseError as e:
             con.close()
             raise StoreError(f"{path} is not a usable SQLite database: {e}") from None
@@ -200,6 +195,30 @@ class Store:
             con.close()
             raise
         return con
+
+    def _setup(self, con: sqlite3.Connection) -> None:
+        """WAL mode, the pragmas and the schema. Switching a new file to WAL and creating the
+        schema take locks for which SQLite does not always wait (``database is locked`` at
+        once when several processes open a new database together, seen under load): the
+        setup is retried until ``timeout``."""
+        deadline = time.monotonic() + self._timeout
+        while True:
+            try:
+                mode = con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+                if str(mode).lower() != "wal":
+                    raise StoreError(f"{self._path}: SQLite could not switch to WAL mode "
+                                     f"(journal mode {mode!r}); put the database on a local "
+                                     "file system")
+                con.execute("PRAGMA synchronous = FULL")
+                con.execute("PRAGMA foreign_keys = ON")
+                self._init_schema(con)
+                return
+            except sqlite3.OperationalError as e:
+                if "locked" not in str(e) or time.monotonic() > deadline:
+                    raise
+                if con.in_transaction:
+                    con.rollback()
+                time.sleep(0.05)
 
     def _schema_version(self, con: sqlite3.Connection) -> int | None:
         tables = {r[0] for r in con.execute(
