@@ -202,21 +202,20 @@ def atlas(
 
 def _print(d: dict, mods) -> None:
     sw = d["sweep"]
-    t = Table(title=f"{len(d['knots'])} knots — {', '.join(m.width()['text'] for m in mods)}")
-    for col in ("knot", "n_c", "n", "i", "families"):
-        t.add_column(col, justify="right" if col in ("n_c", "n", "i") else "left")
+    t = Table(title=f"{len(d['knots'])} knots — {', '.join(m.width()['text'] for m in mods)}",
+              caption="ground state and ε; ✓ converged, · not; +k metastable states")
+    # one cell per model, never cut: the table keeps to 80 columns in a pipe or a log
+    for col in ("knot", "n_c", "families"):
+        t.add_column(col, justify="right" if col == "n_c" else "left", no_wrap=col == "knot")
     for m in mods:
-        t.add_column(f"{m.name} ground", justify="right")
-        t.add_column("conv.", justify="center")
-        t.add_column("meta.", justify="right")
+        t.add_column(f"{m.name}", justify="right", no_wrap=True)
     for e in d["knots"]:
-        cells = [e["name"], str(e["crossing_number"]), str(e["n"]), str(e["i"]),
-                 ",".join(e["families"]) or "—"]
+        cells = [e["name"], str(e["crossing_number"]), ",".join(e["families"]) or "—"]
         for m in mods:
             me = e["models"][m.name]
             g = me["ground"]
-            cells += [f"{g['name']} {g['epsilon']:.2f}" if g else "—",
-                      "✓" if me["converged"] else "·", str(len(me["metastable"]))]
+            cells.append(f"{g['name']} {g['epsilon']:.2f} {'✓' if me['converged'] else '·'} "
+                         f"+{len(me['metastable'])}" if g else "—")
         t.add_row(*[escape(c) for c in cells])
     out.print(t)
     fam = d["families"]
