@@ -4,7 +4,8 @@ What a new user gets: for each knot the command is run exactly as typed (N = 150
 2 replicas per round on the two cores, up to 4 rounds until two replicas agree on the lowest
 state to 0.1 %), and its --json is read: ε of the best replica, its shape, the verdict
 (`converged` and its reason), the rounds used and the wall time. Prints one line per knot and a
-summary; writes bench/defaults_survey.json.
+summary; writes bench/defaults_survey.json after every knot and skips the knots already in it
+(delete it to start over).
 
     python bench/defaults_survey.py [KNOT ...]
 """
@@ -22,8 +23,13 @@ from stiffknots.knots.catalogue import catalogue
 
 def main(argv: list[str]) -> None:
     knots = argv or [k.name for k in catalogue() if 3 <= k.crossing_number <= 8]
-    rows = []
+    path = Path(__file__).with_name("defaults_survey.json")
+    # resumable: the knots already in the file are kept and not run again
+    rows = json.loads(path.read_text()) if path.exists() else []
+    done = {r["knot"] for r in rows}
     for name in knots:
+        if name in done:
+            continue
         t0 = time.perf_counter()
         p = subprocess.run([sys.executable, "-m", "stiffknots.cli", "anneal", name, "--json"],
                            capture_output=True, text=True)
@@ -40,7 +46,7 @@ def main(argv: list[str]) -> None:
                "replicas": len(d.get("replicas", [])), "wall_s": round(wall, 1),
                "width": d.get("width")}
         rows.append(row)
-        Path(__file__).with_name("defaults_survey.json").write_text(json.dumps(rows, indent=2))
+        path.write_text(json.dumps(rows, indent=2))
         print(f"{name:6s} ε = {row['epsilon']:9.3f}  {str(row['shape']):7s} "
               f"converged={row['converged']!s:5s} rounds={row['rounds']} "
               f"{row['wall_s']:6.1f} s  {row['reason']}", flush=True)
@@ -49,7 +55,7 @@ def main(argv: list[str]) -> None:
           f"({100 * len(ok) / max(1, len(rows)):.0f} %); not: "
           f"{', '.join(r['knot'] for r in rows if not r.get('converged'))}")
     print(f"total wall: {sum(r['wall_s'] for r in rows) / 60:.1f} min")
-    Path(__file__).with_name("defaults_survey.json").write_text(json.dumps(rows, indent=2))
+    path.write_text(json.dumps(rows, indent=2))
 
 
 if __name__ == "__main__":
