@@ -32,10 +32,11 @@ def test_energy_formula_circle():
     assert abs(st.epsilon - 2 * math.pi**2) < 0.01  # ε → 2π² (circle)
 
 
+@pytest.mark.parametrize("m_law", ["uniform", "log", "mixed"])
 @pytest.mark.parametrize("exclusion", ["bead", "tube"])
 @pytest.mark.parametrize("temperature", [1e-1, 1e-3, 0.0])
-def test_incremental_energy_bonds_exclusion(exclusion, temperature):
-    st = ChainState(chain("5_2"), MoveParams(exclusion=exclusion), seed=7)
+def test_incremental_energy_bonds_exclusion(exclusion, temperature, m_law):
+    st = ChainState(chain("5_2"), MoveParams(exclusion=exclusion, m_law=m_law), seed=7)
     for _ in range(5):
         st.run(100_000, temperature)
         assert st.energy == pytest.approx(st.recomputed_energy(), rel=1e-10, abs=1e-10)
@@ -111,9 +112,10 @@ def _fuzz(name, temperature, moves, params, seed):
     return st
 
 
+@pytest.mark.parametrize("m_law", ["uniform", "log"])
 @pytest.mark.parametrize("temperature", [0.5, 1e-3])
-def test_topology_preserved_fast(temperature):
-    params = MoveParams(p_single=0.3, m_max=60, l_cap=1.0, phi_max=1.5)
+def test_topology_preserved_fast(temperature, m_law):
+    params = MoveParams(p_single=0.3, m_max=60, l_cap=1.0, phi_max=1.5, m_law=m_law)
     _fuzz("5_2", temperature, 1_000_000, params, seed=1)
 
 
@@ -132,3 +134,30 @@ def test_driver_verifies_and_records():
     assert res.exclusion_margin >= 0
     assert len(res.trace_epsilon) == 30
     assert res.epsilon >= 2 * math.pi**2 * 4 * 0.99  # lower bound 2π²n², n = 2 (discrete)
+
+
+@pytest.mark.parametrize("m_max", [2, 3, 75, 300, 5000])
+def test_crankshaft_length_laws(m_max):
+    # every law draws m in [2, m_max]; the uniform law is flat, the log-uniform one puts the
+    # same share of draws in every octave of m, whatever m_max (the scale-free rule)
+    from stiffknots.engine.prims import _draw_length
+
+    u = (np.arange(200_000) + 0.5) / 200_000
+    span = math.log(0.5 * (m_max + 1))
+    draws = {law: np.array([_draw_length(x, m_max, law, span) for x in u]) for law in (0, 1, 2)}
+    for m in draws.values():
+        assert m.min() == 2 and m.max() == m_max
+    if m_max >= 300:
+        uni, log, mix = draws[0], draws[1], draws[2]
+        assert abs(uni.mean() - (m_max + 2) / 2) < 0.01 * m_max
+        octaves = [np.mean((log >= 2**k) & (log < 2 ** (k + 1))) for k in range(1, 7)]
+        assert np.ptp(octaves) < 0.1 * np.mean(octaves)  # flat in log m
+        assert mix.mean() == pytest.approx(0.5 * (uni.mean() + log.mean()), rel=0.01)
+        # the cost of a move ∝ m: mean (m_max − 2)/ln((m_max + 1)/2), 0.39 of uniform at 300
+        assert log.mean() == pytest.approx((m_max - 2) / span, rel=0.05)
+        assert log.mean() < 0.4 * uni.mean()
+
+
+def test_bad_length_law_is_named():
+    with pytest.raises(ValueError, match="m_law"):
+        ChainState(chain("3_1"), MoveParams(m_law="cubic"))

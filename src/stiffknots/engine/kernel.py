@@ -140,6 +140,7 @@ from stiffknots.engine.prims import (  # noqa: F401 (re-exported: the kernel's p
     HASH_X,
     HASH_Y,
     I_EMODE,
+    I_MLAW,
     I_MMAX,
     I_MODE,
     I_NIPAR,
@@ -151,6 +152,7 @@ from stiffknots.engine.prims import (  # noqa: F401 (re-exported: the kernel's p
     _cell_update,
     _de2,
     _draw_angle,
+    _draw_length,
     _hash,
     _metropolis,
     _move_scale,
@@ -404,6 +406,8 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
     mcap = n - 4 if is_open else n - 3
     if m_max > mcap:
         m_max = mcap
+    m_law = ipar[I_MLAW]
+    m_log_span = math.log(0.5 * (m_max + 1)) if m_max >= 2 else 0.0
     delta = fpar[F_DELTA]
     p_single = fpar[F_PSINGLE]
     phi_max = fpar[F_PHIMAX]
@@ -559,9 +563,7 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
             continue
         # ---- a crankshaft of m ≥ 2 beads ---------------------------------------------------
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        m = 2 + int(u * (m_max - 1))
-        if m > m_max:
-            m = m_max
+        m = _draw_length(u, m_max, m_law, m_log_span)
         cls = 1
         cnt[C_TRIED + cls] += 1
         u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
@@ -593,29 +595,24 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
         s = math.sin(phi)
         phi = abs(phi)
         oc = 1.0 - c
-        # Rodrigues rotation of the moved beads about the axis through pivot j
-        for q in range(m):
-            b = j + 1 + q
-            if b >= n:
-                b -= n
-            newpos[q, 0], newpos[q, 1], newpos[q, 2] = _rodrigues(
-                pos[b, 0], pos[b, 1], pos[b, 2], jx, jy, jz, ex, ey, ez, c, s, oc)
         # ---- energy: only the bending angles at the pivots j and k change --------------
+        # (only the first and last moved beads are rotated before the Metropolis test; the
+        # others after it, with the same expressions, so a rejected move costs one pass)
         jm = j - 1 if j > 0 else n - 1
         kp = k + 1 if k < n - 1 else 0
         b1 = j + 1 if j < n - 1 else 0  # first moved bead
         bm = k - 1 if k > 0 else n - 1  # last moved bead
+        f1x, f1y, f1z = _rodrigues(pos[b1, 0], pos[b1, 1], pos[b1, 2], jx, jy, jz,
+                                   ex, ey, ez, c, s, oc)
+        fmx, fmy, fmz = _rodrigues(pos[bm, 0], pos[bm, 1], pos[bm, 2], jx, jy, jz,
+                                   ex, ey, ez, c, s, oc)
         ax, ay, az = jx - pos[jm, 0], jy - pos[jm, 1], jz - pos[jm, 2]
         old1 = ax * (pos[b1, 0] - jx) + ay * (pos[b1, 1] - jy) + az * (pos[b1, 2] - jz)
-        new1 = ax * (newpos[0, 0] - jx) + ay * (newpos[0, 1] - jy) + az * (newpos[0, 2] - jz)
+        new1 = ax * (f1x - jx) + ay * (f1y - jy) + az * (f1z - jz)
         kx, ky, kz = pos[k, 0], pos[k, 1], pos[k, 2]
         bx, by, bz = pos[kp, 0] - kx, pos[kp, 1] - ky, pos[kp, 2] - kz
         old2 = (kx - pos[bm, 0]) * bx + (ky - pos[bm, 1]) * by + (kz - pos[bm, 2]) * bz
-        new2 = (
-            (kx - newpos[m - 1, 0]) * bx
-            + (ky - newpos[m - 1, 1]) * by
-            + (kz - newpos[m - 1, 2]) * bz
-        )
+        new2 = (kx - fmx) * bx + (ky - fmy) * by + (kz - fmz) * bz
         # curvature limit: no pivot may end beyond θ_max unless it bends less than before
         if cmin > -1.0 and (_turn_blocked(cmin, old1, new1) or _turn_blocked(cmin, old2, new2)):
             continue
@@ -624,6 +621,13 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
         if not ok:
             continue
         cnt[C_ENERGY_OK + cls] += 1
+        # Rodrigues rotation of the moved beads about the axis through pivot j
+        for q in range(m):
+            b = j + 1 + q
+            if b >= n:
+                b -= n
+            newpos[q, 0], newpos[q, 1], newpos[q, 2] = _rodrigues(
+                pos[b, 0], pos[b, 1], pos[b, 2], jx, jy, jz, ex, ey, ez, c, s, oc)
         # ---- exclusion and strand-passage guard ----------------------------------------
         lmove = phi * rho  # largest displacement of any moved point
         dseg = w if w > lmove else lmove

@@ -18,6 +18,7 @@ from stiffknots.errors import InvalidParameter
 EXCLUSION_MODELS = ("bead", "tube")
 ENERGY_MODELS = ("bending", "power")
 ENSEMBLES = ("closed", "extension", "force")
+M_LAWS = ("uniform", "log", "mixed")
 #: the largest force F (C/b²) of the ``force`` ensemble. The energy bookkeeping holds to 1e-9
 #: up to F = 1e4 and fails at 1e6 (open 3_1: the term F·Δz swamps E_d); every force that
 #: selects an excess length ≥ 8 bonds, (ε_e C/F)^½ ≥ 8, is below 50 for every knot of the
@@ -36,6 +37,11 @@ class MoveParams:
     ----------
     delta : angle of the paper's single-bead move (±delta), default π/100 (§VII).
     p_single : probability that a move is the paper's single-bead move.
+    m_law : how a multi-bead move draws its length m in [2, m_max]: ``"uniform"``, ``"log"``
+        (log-uniform: as many moves at every scale of m, the mean cost ∝ m_max/ln m_max) or
+        ``"mixed"`` (half of each, the default: 2.2× the uniform law's moves per second at
+        N = 150, 3.4× at N = 600 for ``"log"``, and the uniform law's large moves, which the
+        4_1's 4-fold cage needs to reach its lowest ε; bench/RESULTS.md).
     m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
         multi-bead moves and leaves exactly the paper's move). None (the default): N/2, set by
         :meth:`for_beads` — a whole loop of a doubly covered circle must be able to turn in
@@ -60,6 +66,7 @@ class MoveParams:
     delta: float = float(np.pi / 100)
     p_single: float = 0.5
     m_max: int | None = None
+    m_law: str = "mixed"
     phi_max: float = 0.6
     l_cap: float = 0.5
     l_min: float = 0.03
@@ -77,6 +84,8 @@ class MoveParams:
         if self.exclusion not in EXCLUSION_MODELS:
             raise InvalidParameter("exclusion", self.exclusion,
                                    "one of " + ", ".join(EXCLUSION_MODELS))
+        if self.m_law not in M_LAWS:
+            raise InvalidParameter("m_law", self.m_law, "one of " + ", ".join(M_LAWS))
         if self.energy not in ENERGY_MODELS:
             raise InvalidParameter("energy", self.energy, "one of " + ", ".join(ENERGY_MODELS))
         for name, lo, hi in (("delta", 0, 0.5), ("p_single", 0, 1), ("phi_max", 0, math.pi),
@@ -123,6 +132,7 @@ class MoveParams:
         fp = np.zeros(K.F_NFPAR, dtype=np.float64)
         ip[K.I_MODE] = EXCLUSION_MODELS.index(self.exclusion)
         ip[K.I_MMAX] = self.m_max
+        ip[K.I_MLAW] = M_LAWS.index(self.m_law)
         fp[K.F_DELTA] = self.delta
         fp[K.F_PSINGLE] = self.p_single if self.m_max > 1 else 1.0
         fp[K.F_PHIMAX] = self.phi_max

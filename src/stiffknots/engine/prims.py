@@ -23,7 +23,8 @@ I_MMAX = 1  # largest number of beads moved by one crankshaft move (≥ 1)
 I_OPEN = 2  # 0 = closed chain, 1 = open chain with both end segments clamped on the z axis
 I_EMODE = 3  # energy per joint: 0 = bending 1 − cos θ (the paper), 1 = (1 − cos θ)^p
 I_POWER = 4  # the exponent p of energy mode 1
-I_NIPAR = 5
+I_MLAW = 5  # law of a crankshaft's length m in [2, m_max]: 0 = uniform, 1 = log-uniform
+I_NIPAR = 6
 
 # float parameter slots (``fpar``)
 F_DELTA = 0  # angle of the single-bead move (paper: π/100)
@@ -429,6 +430,29 @@ def _draw_angle(rho, phi_max, l_cap, log_span, s0, s1, s2, s3):
         lim = scale / rho
     u, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
     return (2.0 * u - 1.0) * lim, s0, s1, s2, s3
+
+
+@njit(cache=True, inline="always")
+def _draw_length(u, m_max, law, log_span):
+    """The length m ∈ [2, m_max] of a multi-bead crankshaft from one uniform u ∈ [0, 1):
+    ``law`` 0 uniform; 1 log-uniform, m = ⌊2·((m_max + 1)/2)^u⌋ (``log_span`` =
+    ln((m_max + 1)/2)): as many moves at every scale of m, whatever N; 2 mixed: u < 1/2 draws
+    uniformly (from 2u), u ≥ 1/2 log-uniformly (from 2u − 1). The proposal is symmetric for
+    any law (m does not depend on the chain), so detailed balance holds."""
+    if law == 2:
+        if u < 0.5:
+            m = 2 + int(2.0 * u * (m_max - 1))
+        else:
+            m = int(2.0 * math.exp((2.0 * u - 1.0) * log_span))
+    elif law == 0:
+        m = 2 + int(u * (m_max - 1))
+    else:
+        m = int(2.0 * math.exp(u * log_span))
+    if m > m_max:
+        m = m_max
+    if m < 2:
+        m = 2
+    return m
 
 
 # ---- brute-force checks (O(N²); verification, not the hot loop) ------------------------------
