@@ -393,7 +393,17 @@ def _knot_from_row(row: dict[str, Any]) -> Knot | None:
 
 @functools.lru_cache(maxsize=1)
 def _tables() -> _Tables:
-    """Load and parse KnotInfo once per process."""
+    """Load and parse KnotInfo once per process, and once per installation on disk
+    (:mod:`stiffknots._diskcache`, keyed by this module's source and the KnotInfo version)."""
+    import database_knotinfo
+
+    from stiffknots._diskcache import cached, source_key
+
+    key = source_key(database_knotinfo.version(), str(MAX_CROSSINGS), files=(__file__,))
+    return cached("knotinfo", key, _parse_tables)
+
+
+def _parse_tables() -> _Tables:
     from database_knotinfo import link_list
 
     rows = link_list()

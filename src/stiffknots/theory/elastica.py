@@ -412,6 +412,14 @@ def elastica_constants(method: str = "integrals") -> ElasticaConstants:
     -------
     ElasticaConstants
     """
+    from stiffknots._diskcache import cached, source_key
+
+    # computed once per installation (every command needs them for its bounds)
+    return cached("elastica", source_key(method, files=(__file__,)),
+                  lambda: _compute_constants(method))
+
+
+def _compute_constants(method: str) -> ElasticaConstants:
     a_loop, e_loop = solve_loop(method, dps=20)
     a_8, e_8 = solve_eight(method, dps=20)
     e_loop, e_8 = float(e_loop), float(e_8)
