@@ -3,6 +3,9 @@ code 2, Ctrl-C → exit 130, never a traceback for either."""
 
 from __future__ import annotations
 
+import os
+import sys
+
 import typer
 
 from stiffknots.cli import (
@@ -76,9 +79,26 @@ def _note_cold_cache() -> None:
                          "`stiffknots warmup` does it ahead) ...")
 
 
+def _json_stdout_only() -> None:
+    """With --json, standard output carries the JSON document and nothing else: file
+    descriptor 1 is pointed at standard error for the whole command — compiled libraries
+    (BLAS, SuperLU, topoly) and worker processes print there — and Python's ``sys.stdout``
+    keeps the real standard output."""
+    if "--json" not in sys.argv[1:]:
+        return
+    try:
+        real = os.dup(1)
+        os.dup2(2, 1)
+    except OSError:
+        return
+    sys.stdout.flush()
+    sys.stdout = os.fdopen(real, "w", encoding="utf-8", buffering=1)
+
+
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
     _note_cold_cache()
+    _json_stdout_only()
     try:
         _main()
     except SystemExit as e:
