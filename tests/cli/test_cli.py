@@ -109,3 +109,18 @@ def test_unknown_option_is_a_usage_error_not_a_traceback():
     rc, out, err = run("anneal", "4_1", "--bogus")
     assert rc == 2
     assert "Traceback" not in err and "No such option" in err
+
+
+def test_anneal_command_defaults_are_the_library_defaults():
+    # the command line spells its defaults out (it imports no engine at start-up): they must
+    # be the ones `stiffknots.anneal` uses, which the benchmarks measured
+    import inspect
+
+    from stiffknots.cli.anneal import anneal as command
+    from stiffknots.engine.schedules import Schedule
+    from stiffknots.problems.closed import DEFAULT_ROUNDS
+
+    sig = inspect.signature(command)
+    assert sig.parameters["rounds"].default == DEFAULT_ROUNDS
+    assert sig.parameters["schedule"].default == Schedule().kind
+    assert sig.parameters["replicas"].default == 2

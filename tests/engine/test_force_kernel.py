@@ -104,13 +104,13 @@ def test_quench_under_force_stretches_the_chain(open31):
     # relax the embedding at fixed extension first (its arm corners alone would pull the
     # tails out when smoothed), then quench at T = 0 under a strong and a negligible force
     # (m_max = 75 as when these numbers were measured: the whole free chain can turn)
-    rel = ChainState(open31, MoveParams(m_max=75), seed=1, closed=False)
+    rel = ChainState(open31, MoveParams(m_max=75, m_law="uniform"), seed=1, closed=False)
     for temperature in (1e-3, 1e-4, 0.0):
         rel.run(100_000, temperature)
     le0 = rel.excess_length
     out = {}
     for force in (0.5, 1e-4):
-        st = force_state(rel.pos, MoveParams(m_max=75), seed=6, force=force, end_fraction=0.3)
+        st = force_state(rel.pos, MoveParams(m_max=75, m_law="uniform"), seed=6, force=force, end_fraction=0.3)
         e0 = st.total_energy
         st.run(300_000, 0.0)
         assert st.total_energy <= e0 + 1e-12  # a quench never goes uphill in E_d − F·Δz

@@ -60,7 +60,7 @@ def anneal(
     rounds: Annotated[int, typer.Option(
         help="Most rounds of --replicas replicas: after each round the run stops if the "
              "lowest state (shape, ε within 0.1 %) was reached by 2 replicas; 1 = a fixed "
-             "budget.")] = 4,
+             "budget.")] = 6,  # problems.closed.DEFAULT_ROUNDS
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper, d=1/√2) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model; default 1/√2).")
@@ -70,9 +70,10 @@ def anneal(
                            "without --beads, N = ⌈(ε/(6·0.001))^½⌉ with ε the knot's upper "
                            "bound (discretisation error ≈ ε/(6N²) below 0.1 %).")] = None,
     schedule: Annotated[str, typer.Option(
-        help="power (paper), geometric or tempering (replica exchange).")] = "power",
+        help="geometric (default), power (the paper's power law; use it with --t-start 3e-2) "
+             "or tempering (replica exchange).")] = "geometric",
     t_start: Annotated[float | None, typer.Option(
-        help="Initial temperature (units of C) (default: 3e-2).")] = None,
+        help="Initial temperature (units of C) (default: 0.1).")] = None,
     t_end: Annotated[float | None, typer.Option(
         help="Final temperature before the quench (default: 1e-6).")] = None,
     relax_fraction: Annotated[float | None, typer.Option(

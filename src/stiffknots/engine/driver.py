@@ -104,11 +104,11 @@ class AnnealSettings:
     powers : the powers p of the ``tight`` plan's continuation.
 
     The defaults (``moves``, :class:`Schedule`, :class:`MoveParams`) are the measured winners of
-    bench/RESULTS.md: 30 M moves, of which the first 40 % relax the starting chain
-    (t = 5e-5 → 1e-7) and the rest anneal from t = 3e-2 with the paper's power law (§VII).
+    bench/RESULTS.md: 15 M moves, of which the first 40 % relax the starting chain
+    (t = 5e-5 → 1e-7) and the rest anneal geometrically from t = 0.1 to 1e-6 (§VII).
     """
 
-    moves: int = 30_000_000
+    moves: int = 15_000_000
     schedule: Schedule = field(default_factory=Schedule)
     params: MoveParams = field(default_factory=MoveParams)
     quench_fraction: float = 0.1

@@ -29,7 +29,7 @@ from stiffknots.problems.base import (
     solve,
 )
 
-DEFAULT_ROUNDS = 4  # rounds of replicas until the lowest state is reached twice
+DEFAULT_ROUNDS = 6  # rounds of replicas until the lowest state is reached twice
 
 
 @dataclass
@@ -173,7 +173,7 @@ def anneal(
     knot : knot name in any usual spelling ('4_1', '4.1', 'K11a1', 'T(2,3)').
     beads : number of beads N (bond length 1, so the chain length L = N).
     moves : attempted moves per replica (annealing plus the final quench); default
-        :func:`default_moves` (30 M at N = 150, scaled as N²).
+        :func:`default_moves` (15 M at N = 150, scaled as N).
     replicas : independent replicas; they run in parallel on ``workers`` processes
         (default: all cores).
     seed : user seed; replica seeds are derived from it (recorded in every result).

@@ -32,7 +32,7 @@ from stiffknots._version import __version__
 from stiffknots.analysis.open_shape import open_shape
 from stiffknots.engine.driver import AnnealSettings
 from stiffknots.engine.params import Ensemble, MoveParams
-from stiffknots.engine.schedules import Schedule
+from stiffknots.engine.schedules import PAPER_POWER_LAW, Schedule
 from stiffknots.errors import EmbeddingError, InvalidParameter
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve, start_code
@@ -47,7 +47,7 @@ DEFAULT_OPEN_W = 0.05
 
 def default_open_params() -> MoveParams:
     """The default exclusion of open knots: a thin tube, w = :data:`DEFAULT_OPEN_W`."""
-    return MoveParams(exclusion="tube", w=DEFAULT_OPEN_W)
+    return MoveParams(exclusion="tube", w=DEFAULT_OPEN_W, m_law="uniform")  # as measured
 TWO_PI2 = 2.0 * np.pi**2
 
 
@@ -134,7 +134,7 @@ class OpenExtension(Problem):
         self.coords = open_chain(self.knot_name, self.excess_length, seed=self.seed)
         self.beads = len(self.coords)
         self.settings = AnnealSettings(moves=V.moves(moves),
-                                       schedule=schedule or Schedule().for_beads(self.beads),
+                                       schedule=schedule or PAPER_POWER_LAW.for_beads(self.beads),
                                        params=(params or default_open_params()
                                                ).for_beads(self.beads),
                                        quench_fraction=quench_fraction,

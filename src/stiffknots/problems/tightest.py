@@ -41,7 +41,7 @@ import numpy as np
 
 from stiffknots.engine.driver import DEFAULT_POWERS, AnnealSettings
 from stiffknots.engine.params import MoveParams
-from stiffknots.engine.schedules import Schedule
+from stiffknots.engine.schedules import PAPER_POWER_LAW
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve
 
@@ -106,7 +106,7 @@ class Tightest(Problem):
         if w is not None and exclusion == "tube":
             kw["w"] = w
         self.settings = AnnealSettings(moves=V.moves(moves),
-                                       schedule=Schedule().for_beads(self.beads),
+                                       schedule=PAPER_POWER_LAW.for_beads(self.beads),
                                        params=MoveParams(**kw).for_beads(self.beads),
                                        plan="tight", powers=powers)
         self.settings.validate()
