@@ -363,7 +363,7 @@ CASES = [
      r"1,000,000,000,000\], got 100000000000000000000000", True),
     ("atlas --knots 3_1 --moves nan", r"--moves must be an integer", False),
     ("atlas --knots 3_1 --moves lots", r"Invalid value for '--moves'", False),
-    ("atlas --knots 3_1 --max-replicas 0", r"--max-replicas must be an integer in \[4, 1,000\]",
+    ("atlas --knots 3_1 --max-replicas 0", r"--max-replicas must be an integer in \[2, 1,000\]",
      True),
     ("atlas --knots 3_1 --max-replicas 1", r"--max-replicas must be an integer in \[4, 1,000\]",
      False),

@@ -30,8 +30,10 @@ D = 1 / math.sqrt(2)
 def test_budgets_are_documented_and_overridable():
     assert set(BUDGETS) == {"tiny", "small", "default", "full"}
     assert (BUDGETS["small"].replicas, BUDGETS["small"].moves) == (2, 5_000_000)
-    assert (BUDGETS["default"].replicas, BUDGETS["default"].moves) == (4, 30_000_000)
-    assert (BUDGETS["full"].replicas, BUDGETS["full"].moves) == (8, 100_000_000)
+    d, f = BUDGETS["default"], BUDGETS["full"]
+    assert (d.replicas, d.moves, d.max_replicas) == (2, 15_000_000, 6)
+    assert (f.replicas, f.moves, f.max_replicas) == (4, 60_000_000, 12)
+    assert BUDGETS["small"].as_dict()["max_replicas"] == 2  # none added
     b = budget_of("small", replicas=3)
     assert (b.name, b.replicas, b.moves) == ("custom", 3, 5_000_000)
     assert budget_of("default") is BUDGETS["default"]

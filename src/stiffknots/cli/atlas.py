@@ -121,7 +121,8 @@ def atlas(
              "tube (diameter --w).")] = "bead,tube",
     budget: Annotated[str, typer.Option(
         help="Replicas × moves per knot and model: tiny (2 × 0.2 M, a smoke test), small "
-             "(2 × 5 M), default (4 × 30 M) or full (8 × 100 M).")] = "default",
+             "(2 × 5 M), default (2 × 15 M, up to 6 replicas until converged) or full "
+             "(4 × 60 M, up to 12).")] = "default",
     out_dir: Annotated[str, typer.Option(
         "--out", help="Folder of the atlas pages.")] = "results/atlas",
     db: Annotated[str, typer.Option(
@@ -141,7 +142,8 @@ def atlas(
         parser=count)] = None,
     max_replicas: Annotated[int | None, typer.Option(
         help="Add replicas, 2 at a time, to every knot and model whose ground state has not "
-             "converged, up to this many in all (default: the budget's; none added).",
+             "converged, up to this many in all (default: the budget's: 6 for default, 12 for "
+             "full, none added for tiny and small).",
         parser=count)] = None,
     seed: SeedOpt = 0,
     json_: JsonOpt = False,
@@ -166,6 +168,8 @@ def atlas(
     V.seed(seed)
     if max_replicas is not None:
         V.integer("max_replicas", max_replicas, bud.replicas, V.MAX_REPLICAS)
+    elif bud.max_replicas is not None:
+        max_replicas = bud.max_replicas  # the budget's: replicas until converged
     if scheduler is None:
         local_workers(workers)
     else:

@@ -55,11 +55,15 @@ class Budget:
         Independent replicas per (knot, model) (≥ 1).
     moves : int
         Attempted moves per replica (≥ 1000).
+    max_replicas : int or None
+        Replicas are added, two at a time, to a (knot, model) whose ground state has not
+        converged, up to this many in all (None: ``replicas``, none added).
     """
 
     name: str
     replicas: int
     moves: int
+    max_replicas: int | None = None
 
     def validate(self) -> Budget:
         """Return self, or raise :class:`InvalidParameter` for a bad count (the limits of
@@ -73,14 +77,15 @@ class Budget:
         return self.replicas * self.moves * 1e-6 * MEASURED_CPU_SECONDS_PER_M_MOVES
 
     def as_dict(self) -> dict:
-        return {"name": self.name, "replicas": self.replicas, "moves": self.moves}
+        return {"name": self.name, "replicas": self.replicas, "moves": self.moves,
+                "max_replicas": self.max_replicas or self.replicas}
 
 
 BUDGETS: dict[str, Budget] = {
     "tiny": Budget("tiny", 2, 200_000),
     "small": Budget("small", 2, 5_000_000),
-    "default": Budget("default", 4, 30_000_000),
-    "full": Budget("full", 8, 100_000_000),
+    "default": Budget("default", 2, 15_000_000, max_replicas=6),
+    "full": Budget("full", 4, 60_000_000, max_replicas=12),
 }
 
 

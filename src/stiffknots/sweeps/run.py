@@ -196,8 +196,9 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         Replicas are added, ``step`` at a time, to every (knot, model) whose ground state has
         not converged once its replicas have ended
         (:func:`~stiffknots.sweeps.convergence.is_converged`), up to ``max_replicas`` in all.
-        Default: the budget's replicas (nothing added). The added replicas have the budget's
-        moves and settings: they join the same ensemble, and a resumed sweep skips them too.
+        Default: the budget's ``max_replicas`` (its replicas when None: nothing added). The
+        added replicas have the budget's moves and settings: they join the same ensemble, and
+        a resumed sweep skips them too.
     step : int
         Replicas added at a time.
     listener : SweepListener, optional
@@ -219,7 +220,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         local_workers(workers)
     else:
         scheduler_address(scheduler)
-    max_r = budget.replicas if max_replicas is None else V.integer(
+    max_r = (budget.max_replicas or budget.replicas) if max_replicas is None else V.integer(
         "max_replicas", max_replicas, budget.replicas, V.MAX_REPLICAS)
     step = V.integer("step", step, 1, V.MAX_REPLICAS)
     jobs = plan_sweep(knots, models, budget, seed)
