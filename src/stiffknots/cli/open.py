@@ -95,7 +95,10 @@ def open_knot(
         from stiffknots.problems.open_extension import DEFAULT_OPEN_W
 
         w = DEFAULT_OPEN_W
-    params = MoveParams(exclusion=exclusion, m_max=m_max, **({} if w is None else {"w": w}))
+    from stiffknots.problems.open_extension import OPEN_M_LAW
+
+    params = MoveParams(exclusion=exclusion, m_max=m_max, m_law=OPEN_M_LAW,
+                        **({} if w is None else {"w": w}))
     forces = floats(force, "--force") if force is not None else []
     les = floats(excess_length, "--excess-length") if excess_length is not None else []
     if ensemble == "force":

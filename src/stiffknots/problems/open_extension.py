@@ -45,9 +45,14 @@ DEFAULT_OPEN_MOVES = 30_000_000
 DEFAULT_OPEN_W = 0.05
 
 
+#: crankshaft lengths of open chains: uniform, the law their defaults were measured with
+#: (the closed knots' default is ``"mixed"``, :class:`MoveParams`)
+OPEN_M_LAW = "uniform"
+
+
 def default_open_params() -> MoveParams:
     """The default exclusion of open knots: a thin tube, w = :data:`DEFAULT_OPEN_W`."""
-    return MoveParams(exclusion="tube", w=DEFAULT_OPEN_W, m_law="uniform")  # as measured
+    return MoveParams(exclusion="tube", w=DEFAULT_OPEN_W, m_law=OPEN_M_LAW)
 TWO_PI2 = 2.0 * np.pi**2
 
 

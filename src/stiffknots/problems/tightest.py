@@ -100,7 +100,7 @@ class Tightest(Problem):
         if not powers:
             V.integer("powers", None)
         powers = tuple(V.integer("powers", p, 1, 1024) for p in powers)
-        kw: dict = {"exclusion": exclusion}
+        kw: dict = {"exclusion": exclusion, "m_law": "uniform"}  # as its defaults were measured
         if d is not None:
             kw["d"] = d
         if w is not None and exclusion == "tube":

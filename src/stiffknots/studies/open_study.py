@@ -67,7 +67,7 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
     """Run the study on ``budget`` and write the report; returns the summary dict."""
     from stiffknots.engine.params import MoveParams
     from stiffknots.knots.catalogue import get_knot
-    from stiffknots.problems.open_extension import anneal_open, tension_scan
+    from stiffknots.problems.open_extension import OPEN_M_LAW, anneal_open, tension_scan
     from stiffknots.problems.tightest import tightest
     from stiffknots.report.document import Document
     from stiffknots.report.figures import plot_tension, save_figure
@@ -85,7 +85,7 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
     # 1. the open trefoil towards the thin limit
     trend = []
     for le in b["trend"]:
-        params = MoveParams(exclusion="tube", w=THIN_W, m_max=min(80, le))
+        params = MoveParams(exclusion="tube", w=THIN_W, m_max=min(80, le), m_law=OPEN_M_LAW)
         r = _done(anneal_open("3_1", le, moves=b["trend_moves_per_le"] * le,
                               replicas=b["replicas"], seed=seed, params=params))
         d = r.to_dict()
@@ -108,7 +108,8 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
     tension_pts = []
     for name in SCAN_KNOTS:
         sc = tension_scan(name, b["scan"], moves=b["scan_moves"], replicas=b["replicas"],
-                          seed=seed, params=MoveParams(exclusion="tube", w=SCAN_W, m_max=60))
+                          seed=seed, params=MoveParams(exclusion="tube", w=SCAN_W, m_max=60,
+                                                       m_law=OPEN_M_LAW))
         for res in sc.results:
             _done(res)
         scans[name] = sc.to_dict()

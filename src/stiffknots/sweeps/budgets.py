@@ -1,32 +1,31 @@
 """Budgets of a sweep: how many replicas of how many attempted moves each (knot, model) gets.
 
-A budget is a name for (replicas, moves per replica); every replica runs the default annealing
-schedule of :class:`~stiffknots.engine.driver.AnnealSettings` (relaxation, then the paper's
-power-law annealing, §VII) on those moves. The moves are part of every replica's settings,
-hence of its store key: two budgets never share results, while a budget with more replicas
-of the same moves reuses the replicas a smaller one stored (replica r's seed does not depend
-on the number of replicas).
+A budget is a name for (replicas, moves per replica, most replicas); every replica runs the
+default annealing schedule of :class:`~stiffknots.engine.driver.AnnealSettings` (relaxation,
+then geometric annealing from T = 0.1, §VII) on those moves and is polished. The moves are
+part of every replica's settings, hence of its store key: two budgets never share results,
+while a budget with more replicas of the same moves reuses the replicas a smaller one stored
+(replica r's seed does not depend on the number of replicas). A (knot, model) whose ground
+state has not converged once its replicas have ended gets two more, up to ``max_replicas``
+(:func:`stiffknots.sweeps.run.run_sweep`): easy knots stop at two, hard ones get more.
 
-=========  ========  ============  ==================================================
-budget     replicas  moves         CPU seconds per (knot, model) on one core, N = 150
-=========  ========  ============  ==================================================
-tiny       2         200,000       ≈ 0.3 — a smoke test of the machinery, nothing converges
-small      2         5,000,000     ≈ 6 (measured 4.9–12.1 over 8 knots × 2 models)
-default    4         30,000,000    ≈ 76 (measured 57–66 on 4 knots of n ≠ i, bead rule)
-full       8         100,000,000   ≈ 500 (extrapolated)
-=========  ========  ============  ==================================================
+=========  ========  ============  ============  =========================================
+budget     replicas  moves         most          CPU seconds per (knot, model), N = 150
+=========  ========  ============  ============  =========================================
+tiny       2         200,000       2             ≈ 1 — a smoke test of the machinery
+small      2         5,000,000     2             ≈ 10
+default    2         15,000,000    6             ≈ 20 converged at 2, ≈ 60 at 6 replicas
+full       4         60,000,000    12            ≈ 160 at 4 replicas, ≈ 480 at 12
+=========  ========  ============  ============  =========================================
 
-Measurements (``stiffknots atlas``, seed 0, CPU seconds of the replicas as the engine reports
-them, on the shared 2-core machine): ``small`` on 3_1, 5_2, 6_2, 7_4, 8_19, 9_42, 10_1,
-10_161 under both models — 32 replicas, 118.9 s for 160 M moves; ``default`` on 5_2, 6_2,
-7_4, 10_1 under the bead rule — 16 replicas, 238.6 s for 480 M moves. Per million moves: the
-knots with n ≠ i cost 0.43–0.66 s (0.50 at 30 M moves per replica), the n = i knots, whose
-replicas end as circular braids, 0.71–1.21 s; the tube model costs ≈ 15 % more than the bead
-rule. Through 10 crossings 46 of the 249 knots have n = i, so the mix costs ≈ 0.63 s per
-million moves (:data:`MEASURED_CPU_SECONDS_PER_M_MOVES`). A sweep of every prime knot
-through 10 crossings under both models (498 (knot, model) pairs) on 2 free cores then takes
-about 26 min on ``small``, 5.3 h on ``default``, 35 h on ``full``, plus well under a second
-of CPU per (knot, model) and worker to build its starts (seconds for the 80 starts).
+Measurements behind the default row (2026-11-29, ``bench/defaults_survey.py``: the same
+replicas — 15 M moves, polished — through ``stiffknots anneal``, 35 knots through 8
+crossings, bead rule): 7–13 CPU seconds per replica; about half the knots converge with
+their first two replicas. A sweep of every prime knot through 10 crossings under both models
+(498 (knot, model) pairs) on 2 free cores then takes about 3 h on ``default`` (an estimate:
+that run has not been made on this machine; the README says what has been run), 45 min on
+``small``. Before 2026-11-29 ``default`` was 4 × 30 M moves of the uniform-length crankshafts
+(≈ 76 CPU s per pair, 5.3 h).
 """
 
 from __future__ import annotations
@@ -39,8 +38,9 @@ from stiffknots.problems import validate as V
 __all__ = ["Budget", "BUDGETS", "budget_of", "MEASURED_CPU_SECONDS_PER_M_MOVES"]
 
 #: CPU seconds per million attempted moves of one replica at N = 150 under the default
-#: schedule, for the mix of knots through 10 crossings (module docstring).
-MEASURED_CPU_SECONDS_PER_M_MOVES = 0.63
+#: schedule, its polish included: 7–13 CPU s per 15 M-move replica over the knots through 8
+#: crossings (module docstring), ≈ 10/15.
+MEASURED_CPU_SECONDS_PER_M_MOVES = 0.67
 
 
 @dataclass(frozen=True)
