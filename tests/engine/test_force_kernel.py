@@ -110,7 +110,8 @@ def test_quench_under_force_stretches_the_chain(open31):
     le0 = rel.excess_length
     out = {}
     for force in (0.5, 1e-4):
-        st = force_state(rel.pos, MoveParams(m_max=75, m_law="uniform"), seed=6, force=force, end_fraction=0.3)
+        st = force_state(rel.pos, MoveParams(m_max=75, m_law="uniform"), seed=6, force=force,
+                         end_fraction=0.3)
         e0 = st.total_energy
         st.run(300_000, 0.0)
         assert st.total_energy <= e0 + 1e-12  # a quench never goes uphill in E_d − F·Δz
