@@ -365,7 +365,7 @@ CASES = [
     ("atlas --knots 3_1 --moves lots", r"Invalid value for '--moves'", False),
     ("atlas --knots 3_1 --max-replicas 0", r"--max-replicas must be an integer in \[2, 1,000\]",
      True),
-    ("atlas --knots 3_1 --max-replicas 1", r"--max-replicas must be an integer in \[4, 1,000\]",
+    ("atlas --knots 3_1 --max-replicas 1", r"--max-replicas must be an integer in \[2, 1,000\]",
      False),
     ("atlas --knots 3_1 --max-replicas 100000", r"--max-replicas must be an integer", False),
     ("atlas --knots 3_1 --max-replicas nan", r"--max-replicas must be an integer", False),
