@@ -157,12 +157,12 @@ def test_replicas_added_until_converged(tmp_path):
     with Store(tmp_path / "s.db") as st:
         rec = Recorder()
         rec.added = lambda n: rec.events.append(("added", n))
-        res = run_sweep(["3_1", "4_1"], models, budget, st, seed=0, workers=2,
+        res = run_sweep(["3_1", "7_4"], models, budget, st, seed=0, workers=2,
                         max_replicas=4, listener=rec)
         assert not res.failed and res.added > 0, "nothing added: the test tested nothing"
         assert res.jobs == 4 + res.added and res.ran == res.jobs and res.max_replicas == 4
         assert sum(e[1] for e in rec.kinds("added")) == res.added
-        for knot in ("3_1", "4_1"):
+        for knot in ("3_1", "7_4"):
             rows = st.replicas(knot=knot)
             first = [{"label": r["shape"], "multiplicity": r["multiplicity"],
                       "epsilon": r["epsilon"]} for r in rows if r["replica"] < 2]
@@ -173,7 +173,7 @@ def test_replicas_added_until_converged(tmp_path):
             assert sorted(r["replica"] for r in rows) == list(range(len(rows)))
             assert len({r["settings_hash"] for r in rows}) == 1  # one ensemble
         n = st.count()
-        res2 = run_sweep(["3_1", "4_1"], models, budget, st, seed=0, workers=2,
+        res2 = run_sweep(["3_1", "7_4"], models, budget, st, seed=0, workers=2,
                          max_replicas=4)
         assert (res2.ran, res2.workers, st.count()) == (0, 0, n)
         # the added replicas count as stored (or are not needed: the 4 agree by now)
