@@ -53,6 +53,7 @@ def cached(name: str, key: str, compute: Callable[[], T]) -> T:
     except Exception:  # missing, unreadable or from an incompatible build: compute it
         pass
     value = compute()
+    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
@@ -60,8 +61,6 @@ def cached(name: str, key: str, compute: Callable[[], T]) -> T:
             pickle.dump(value, fh, protocol=pickle.HIGHEST_PROTOCOL)
         os.replace(tmp, path)
     except Exception:  # a read-only home, a full disk: the value is still returned
-        try:
-            os.unlink(tmp)  # type: ignore[possibly-undefined]
-        except Exception:
-            pass
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
     return value

@@ -166,10 +166,8 @@ def atlas(
         raise UserError("--w is the tube diameter: add tube to --models")
     bud = budget_of(budget, replicas=replicas, moves=moves)
     V.seed(seed)
-    if max_replicas is not None:
+    if max_replicas is not None:  # None: the budget's (run_sweep)
         V.integer("max_replicas", max_replicas, bud.replicas, V.MAX_REPLICAS)
-    elif bud.max_replicas is not None:
-        max_replicas = bud.max_replicas  # the budget's: replicas until converged
     if scheduler is None:
         local_workers(workers)
     else:

@@ -86,12 +86,12 @@ def _json_stdout_only() -> None:
     keeps the real standard output."""
     if "--json" not in sys.argv[1:]:
         return
+    sys.stdout.flush()
     try:
         real = os.dup(1)
         os.dup2(2, 1)
     except OSError:
         return
-    sys.stdout.flush()
     sys.stdout = os.fdopen(real, "w", encoding="utf-8", buffering=1)
 
 

@@ -448,10 +448,8 @@ def _draw_length(u, m_max, law, log_span):
         m = 2 + int(u * (m_max - 1))
     else:
         m = int(2.0 * math.exp(u * log_span))
-    if m > m_max:
+    if m > m_max:  # rounding at u → 1 (every law gives m ≥ 2: exp(·) ≥ 1)
         m = m_max
-    if m < 2:
-        m = 2
     return m
 
 
