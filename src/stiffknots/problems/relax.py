@@ -26,7 +26,7 @@ The curve — a closed polygon of any bond lengths — is
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -40,6 +40,9 @@ from stiffknots.problems import base
 from stiffknots.problems import validate as V
 
 D_BEAD = 1 / math.sqrt(2)
+#: default Monte Carlo moves of `relax` per bead (12 M at N = 150, the relaxation stage of the
+#: annealing as it was measured; the annealing's own stage is 6 M since 2026-11-29)
+RELAX_MOVES_PER_BEAD = 80_000
 
 
 @dataclass
@@ -156,9 +159,11 @@ class Relax(base.Problem):
         # the relaxation stage of the annealing only: low temperature, then a quench
         relax = Schedule(kind="geometric", t_start=sch.t_relax, t_end=sch.t_relax_end,
                          relax_fraction=0.0)
+        # the budget and move law its defaults were measured with: 12 M moves at N = 150
+        # (× N/150), uniform crankshaft lengths (README: 4_1 from ridgerunner → 127.6051)
         self.settings = AnnealSettings(
-            moves=V.moves(round(0.4 * base.default_moves(beads)) if moves is None else moves),
-            schedule=relax, params=params)
+            moves=V.moves(round(RELAX_MOVES_PER_BEAD * beads) if moves is None else moves),
+            schedule=relax, params=replace(params, m_law="uniform"))
         self.settings.validate()
         self.code = start_code(self.knot_name, self.coords, True, "input")
         self._bounds = _bounds(self.knot_name)
@@ -208,8 +213,8 @@ def relax(chain: Chain | np.ndarray, beads: int = 150, moves: int | None = None,
     ----------
     chain : a closed :class:`~stiffknots.chain.Chain` (or its (M, 3) coordinates).
     beads : N of the resampled chain (bond length 1, L = N).
-    moves : Monte Carlo moves per replica (default 40 % of :func:`default_moves`, the
-        relaxation stage of an annealing).
+    moves : Monte Carlo moves per replica (default :data:`RELAX_MOVES_PER_BEAD` per bead,
+        12 M at N = 150).
     exclusion, w_over_L : the paper's bead rule (``"bead"``, d = 1/√2 bond) or a tube of
         diameter w = w_over_L · N (``"tube"``).
     knot : the knot's name, if the invariants cannot tell (a HOMFLY-PT tie) or to check it.
