@@ -1,10 +1,11 @@
 """Every prime knot through 8 crossings with `stiffknots anneal K` and its defaults.
 
 What a new user gets: for each knot the command is run exactly as typed (N = 150, bead rule,
-2 replicas per round on the two cores, up to 4 rounds until two replicas agree on the lowest
-state to 0.1 %), and its --json is read: ε of the best replica, its shape, the verdict
-(`converged` and its reason), the rounds used and the wall time. Prints one line per knot and a
-summary; writes bench/defaults_survey.json after every knot and skips the knots already in it
+2 replicas per round on the two cores, up to 8 rounds — two of new searches, then legs of
+basin hops continuing the lowest searches that still improve — until two independent
+searches agree on the lowest state to 0.1 %), and its --json is read: ε of the best replica,
+its shape, the verdict (`converged` and its reason), the rounds used and the wall time.
+Prints one line per knot and a summary; writes bench/defaults_survey.json after every knot and skips the knots already in it
 (delete it to start over).
 
     python bench/defaults_survey.py [KNOT ...]

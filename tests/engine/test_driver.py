@@ -34,6 +34,8 @@ PT = replace(SMALL, schedule=Schedule(kind="tempering", t_start=1e-3, t_end=1e-6
 FORCE = replace(SMALL, ensemble=Ensemble("force", force=0.05), schedule=Schedule(
     kind="geometric", t_start=1e-2, t_end=1e-6, relax_fraction=0.0))
 TIGHT = replace(SMALL, plan="tight", params=MoveParams(exclusion="tube", w=0.25))
+# basin hops (each from the lowest polished chain so far) resume exactly too
+HOPS = replace(SMALL, schedule=Schedule(hops=3, hop_fraction=0.3))
 
 
 def start_of(settings):
@@ -71,8 +73,8 @@ def run(x, settings, **kw):
     return run_replica(x, settings, **kw)
 
 
-@pytest.mark.parametrize("settings", [SMALL, PT, FORCE, TIGHT],
-                         ids=["anneal", "tempering", "force", "tight"])
+@pytest.mark.parametrize("settings", [SMALL, PT, FORCE, TIGHT, HOPS],
+                         ids=["anneal", "tempering", "force", "tight", "hops"])
 def test_stop_and_resume_is_exact(tmp_path, settings):
     x = start_of(settings)
     a = run(x, settings, seed=11)

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from stiffknots.problems.base import Problem, Replica, verdict
+from stiffknots.problems.base import Problem, Replica, stalled, verdict
 from stiffknots.problems.closed import anneal
 
 
@@ -21,10 +21,19 @@ class _Rule(Problem):
     def state_of(self, r):
         return r.observables["label"], r.observables["value"]
 
+    def sort_key(self, r):
+        return r.observables["value"]
 
-def _r(label, value):
+
+_count = iter(range(10**6))
+
+
+def _r(label, value, lineage=None, leg=0):
+    """A finished replica in a state; its own search unless ``lineage`` names another's."""
     r = Replica.__new__(Replica)
     r.observables = {"label": label, "value": value}
+    r.replica = next(_count)
+    r.lineage, r.leg = lineage, leg
     return r
 
 
@@ -39,6 +48,50 @@ def test_verdict_counts_the_lowest_state_only():
     ok, _ = verdict(_Rule(agree=3), [_r("80", 147.3)] * 2)
     assert not ok
     assert verdict(rule, []) == (False, "no replica finished")
+
+
+def test_a_search_counts_once_however_many_legs_reach_its_state():
+    rule = _Rule()
+    a = _r("other", 172.66)
+    legs = [_r("other", 172.66, lineage=a.replica, leg=k) for k in (1, 2)]
+    ok, why = verdict(rule, [a, *legs, _r("other", 173.5)])
+    # three replicas in the lowest state, but one search: no second opinion
+    assert not ok and "1 of 2 independent searches (4 replicas)" in why
+    b = _r("other", 173.9)
+    b_leg = _r("other", 172.68, lineage=b.replica, leg=1)  # another search, continued
+    ok, why = verdict(rule, [a, *legs, b, b_leg])
+    assert ok and "2 of 2 independent searches (5 replicas)" in why
+
+
+def test_a_search_has_stalled_when_its_last_leg_found_nothing_lower():
+    rule = _Rule()
+    a = _r("other", 173.13)
+    assert not stalled(rule, [a], a)  # never continued
+    l1 = _r("other", 172.75, lineage=a.replica, leg=1)
+    assert not stalled(rule, [a, l1], l1)  # its leg went lower
+    l2 = _r("other", 172.70, lineage=a.replica, leg=2)  # 0.03 % lower: within rel_tol
+    assert stalled(rule, [a, l1, l2], l2)
+    l3 = _r("other", 172.30, lineage=a.replica, leg=3)
+    assert not stalled(rule, [a, l1, l2, l3], l3)
+
+
+def test_later_rounds_continue_the_lowest_searches():
+    # rounds 1-2 start searches from the embeddings; round 3 continues the two lowest of them
+    # by basin hops from their polished chains; every replica is verified as 7_4
+    res = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=3)
+    first = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=2)
+    if res.converged and res.rounds < 3:
+        pytest.skip("converged before any continuation")
+    by_id = {r.replica: r for r in res.replicas}
+    early = sorted((by_id[i] for i in range(4)), key=lambda r: r.epsilon)
+    for r in first.replicas:  # the first two rounds are those of a two-round run
+        assert np.array_equal(by_id[r.replica].coords, r.coords)
+    legs = [by_id[4], by_id[5]]
+    assert {r.lineage for r in legs} == {early[0].replica, early[1].replica}
+    assert all(r.leg == 1 and r.knot == "7_4" and r.knot_verified for r in legs)
+    for r in legs:  # a leg's result is never above the chain it started from
+        assert r.epsilon <= by_id[r.lineage].epsilon + 1e-9
+    assert all(by_id[i].lineage == i and by_id[i].leg == 0 for i in range(4))
 
 
 def test_an_easy_knot_converges_in_one_round():

@@ -54,13 +54,14 @@ def anneal(
         help="Number of beads N (bond length 1); default 150, or with --w-over-L the N rule "
              "(discretisation error below 0.1 %).", parser=count, show_default=False)] = None,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica (default: 30,000,000 at N = 150, scaled as N²; "
-             "3e7 works too).", parser=count)] = None,
+        help="Attempted moves per replica (default: 15,000,000 at N = 150, scaled as N; "
+             "1.5e7 works too).", parser=count)] = None,
     replicas: ReplicasOpt = 2,
     rounds: Annotated[int, typer.Option(
         help="Most rounds of --replicas replicas: after each round the run stops if the "
-             "lowest state (shape, ε within 0.1 %) was reached by 2 replicas; 1 = a fixed "
-             "budget.")] = 6,  # problems.closed.DEFAULT_ROUNDS
+             "lowest state (shape, ε within 0.1 %) was reached by 2 independent searches; "
+             "rounds after the second continue the lowest searches by basin hops while they "
+             "improve; 1 = a fixed budget.")] = 8,  # problems.closed.DEFAULT_ROUNDS
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper, d=1/√2) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model; default 1/√2).")
@@ -154,7 +155,8 @@ def anneal(
                            resume=resume, start=start, rounds=rounds, initial=initial,
                            polish=polish)
     if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
-        for rnd in range(rounds):
+        # (the rounds that start new searches; a continuation's start is known only then)
+        for rnd in range(min(rounds, problem.fresh_rounds)):
             V.checkpoints(problem.jobs(first=rnd * replicas))
     with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
                          disable=json_) as bars:

@@ -158,6 +158,21 @@ class ChainState:
         if seed is not None:
             self.rng[:] = K.new_rng_state(seed)
 
+    def restore(self, coords: np.ndarray) -> None:
+        """Replace the chain by ``coords`` (a chain this state held before, e.g. the lowest
+        quenched one of a basin-hopping run): positions copied, cell list rebuilt, energy
+        recomputed from scratch; parameters, counters and generator unchanged.
+
+        This is a jump, not a motion: it is only used with a chain reached earlier by this
+        state's own moves, so the knot type is the one the moves kept (none passes a strand
+        through another).
+        """
+        pos = np.asarray(coords, dtype=np.float64)
+        if pos.shape != self.pos.shape:
+            raise ValueError(f"restore: shape {pos.shape}, expected {self.pos.shape}")
+        self.pos[:] = pos
+        self._configure(self.params)
+
     # -- observables -------------------------------------------------------------------------
 
     @property

@@ -71,6 +71,11 @@ class Replica(ReplicaResult):
     knot_check : how the type was confirmed (module docstring).
     polish : what the final minimiser did (module docstring; None if it was not applied).
     start : the starting embedding (``braid``, ``cage``, ``eighty``, ``open``).
+    lineage : the independent search this replica belongs to: the index of the replica that
+        started it from an embedding (its own index for such a replica); a continuation leg
+        (basin hops from a finished replica's chain, see :func:`solve`) keeps its parent's.
+    leg : 0 for a replica started from an embedding, k for the k-th continuation of its
+        lineage.
     observables : problem-specific numbers (e.g. ``length_over_R`` of §IX D), also
         readable as attributes (``r.length_over_R``).
     """
@@ -78,6 +83,8 @@ class Replica(ReplicaResult):
     knot: str | None = None
     knot_verified: bool | None = None
     start: str | None = None
+    lineage: int | None = None
+    leg: int = 0
     observables: dict = field(default_factory=dict)
     knot_check: str | None = None
     polish: dict | None = None
@@ -105,6 +112,8 @@ class Job:
     checkpoint: Path | None = None
     resume: bool = False
     checkpoint_seconds: float | None = None
+    lineage: int | None = None  # the search it continues (None: a new one, its own index)
+    leg: int = 0  # continuation legs of that search before this one
 
 
 DEFAULT_MOVES = AnnealSettings.moves  # 15 M at N = 150: relaxation + annealing (schedules.py)
@@ -182,6 +191,7 @@ def run_job(job: Job) -> Replica:
     check = "HOMFLY-PT polynomial unchanged from the starting chain" if ok else (
         "HOMFLY-PT polynomial differs from the starting chain's")
     return Replica(**fields, knot=found, knot_verified=ok, start=job.start,
+                   lineage=job.replica if job.lineage is None else job.lineage, leg=job.leg,
                    knot_check=check, polish=info)
 
 
@@ -334,6 +344,15 @@ class Problem:
     agree: int = 2
     #: … of the same shape and value within ``rel_tol`` (relative) of the lowest
     rel_tol: float = 1e-3
+    #: rounds of new searches (replicas from the embeddings) before :func:`solve` continues
+    #: the lowest searches instead (problems that implement :meth:`continue_jobs`)
+    fresh_rounds: int = 2
+
+    def continue_jobs(self, parents: list[Replica], first: int) -> list[Job] | None:
+        """Jobs that continue the searches of ``parents`` (one job each, replica indices
+        ``first`` …), or None if this problem does not continue searches (every round then
+        starts new replicas from the embeddings)."""
+        return None
 
     def jobs(self, first: int = 0) -> list[Job]:
         """The jobs of replicas ``first`` … ``first + replicas − 1`` (one round)."""
@@ -384,17 +403,20 @@ class Problem:
     def _replica_jobs(self, settings: AnnealSettings, coords: Callable[[int], np.ndarray],
                       start: Callable[[int], str], code: Callable[[int], str],
                       checkpoint_dir=None, resume: bool = False,
-                      checkpoint_seconds: float | None = None, first: int = 0) -> list[Job]:
-        """One job per replica ``first`` … ``first + replicas − 1``; replica r's seed is the
-        r-th seed derived from the problem's seed, whatever the round it runs in."""
-        seeds = replica_seeds(self.seed, first + self.replicas)
+                      checkpoint_seconds: float | None = None, first: int = 0,
+                      count: int | None = None) -> list[Job]:
+        """One job per replica ``first`` … ``first + count − 1`` (``count``: default
+        ``replicas``); replica r's seed is the r-th seed derived from the problem's seed,
+        whatever the round it runs in."""
+        n = self.replicas if count is None else count
+        seeds = replica_seeds(self.seed, first + n)
         return [Job(replica=r, seed=seeds[r], coords=coords(r), settings=settings,
                     knot=self.knot_name, start=start(r), start_code=code(r),
                     polish=self.polish,
                     checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
                                 if checkpoint_dir is not None else None),
                     resume=resume, checkpoint_seconds=checkpoint_seconds)
-                for r in range(first, first + self.replicas)]
+                for r in range(first, first + n)]
 
     def bounds(self) -> dict:
         return {}
@@ -412,23 +434,58 @@ class Problem:
         return {}
 
 
+def lineage_bests(problem: Problem, replicas: list[Replica]) -> list[Replica]:
+    """The lowest replica of every lineage (independent search), lowest first."""
+    best: dict[int, Replica] = {}
+    for r in replicas:
+        key = lineage_of(r)
+        if key not in best or problem.sort_key(r) < problem.sort_key(best[key]):
+            best[key] = r
+    return sorted(best.values(), key=problem.sort_key)
+
+
+def lineage_of(r: Replica) -> int:
+    """The lineage (independent search) of a replica: see :class:`Replica`."""
+    return r.replica if r.lineage is None else r.lineage
+
+
+def stalled(problem: Problem, replicas: list[Replica], best: Replica) -> bool:
+    """Has the search of ``best`` (its lineage's lowest replica) stopped improving? True when
+    its latest continuation leg did not go below the lineage's lowest before that leg by more
+    than ``problem.rel_tol``: its basin hops no longer find lower minima (the circular braids
+    of the n = i knots do this at once: their registry is set by the relaxation, and a new
+    search is then the better use of a replica)."""
+    mine = sorted((r for r in replicas if lineage_of(r) == lineage_of(best)),
+                  key=lambda r: r.leg)
+    if len(mine) < 2 or mine[-1].leg == 0:
+        return False
+    before = min(problem.sort_key(r) for r in mine[:-1])
+    return problem.sort_key(mine[-1]) > before - problem.rel_tol * abs(before)
+
+
 def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
     """Has the search converged? True when the lowest state — the best replica's shape, and a
     value within ``problem.rel_tol`` of the lowest — was reached by at least
-    ``problem.agree`` replicas; and a sentence saying why (or why not)."""
+    ``problem.agree`` independent searches; and a sentence saying why (or why not).
+
+    A search (lineage) is a replica started from an embedding together with the legs that
+    continued it (:func:`solve`); it counts once, by its lowest replica: a leg that returns to
+    its parent's state is no second opinion, two searches that never shared a chain are."""
     if not replicas:
         return False, "no replica finished"
-    states = [problem.state_of(r) for r in replicas]
-    best = min(range(len(states)), key=lambda k: states[k][1])
-    label, value = states[best]
+    bests = lineage_bests(problem, replicas)
+    states = [problem.state_of(r) for r in bests]
+    label, value = states[0]
     tol = problem.rel_tol * max(abs(value), 1e-300)
     hits = sum(1 for lab, v in states if lab == label and v - value <= tol)
     name = f"{label}, {value:.6g}" if label else f"{value:.6g}"
+    of = (f"{len(bests)} independent searches ({len(replicas)} replicas)"
+          if len(bests) < len(replicas) else f"{len(replicas)} replicas")
     if hits >= problem.agree:
-        return True, (f"the lowest state ({name}) was reached by {hits} of {len(replicas)} "
-                      f"replicas (within {problem.rel_tol:.0e})")
-    return False, (f"the lowest state ({name}) was reached by {hits} of {len(replicas)} "
-                   f"replicas; {problem.agree} needed (within {problem.rel_tol:.0e})")
+        return True, (f"the lowest state ({name}) was reached by {hits} of {of} "
+                      f"(within {problem.rel_tol:.0e})")
+    return False, (f"the lowest state ({name}) was reached by {hits} of {of}; "
+                   f"{problem.agree} needed (within {problem.rel_tol:.0e})")
 
 
 def solve(problem: Problem, *, workers: int | None = None,
@@ -441,7 +498,12 @@ def solve(problem: Problem, *, workers: int | None = None,
     The replicas run in rounds of ``problem.replicas``; after each round the verdict
     (:func:`verdict`) decides: converged — stop; not converged — run another round, up to
     ``problem.rounds`` (easy knots stop early, hard ones get more). The result carries
-    ``converged`` and the reason.
+    ``converged`` and the reason. The first ``problem.fresh_rounds`` rounds start new searches
+    from the embeddings; later rounds, where the problem can (:meth:`Problem.continue_jobs`),
+    continue the ``problem.replicas`` lowest searches instead — each from its lowest chain,
+    by basin hops — so that a hard knot's budget grows per search, not by more short
+    searches: on knots whose minima lie within tenths of a percent of each other, two long
+    searches agree where many short ones each land in another minimum (bench/RESULTS.md).
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
@@ -469,6 +531,14 @@ def solve(problem: Problem, *, workers: int | None = None,
     converged, reason, rounds = False, "no replica finished", 0
     for rnd in range(max(1, problem.rounds)):
         jobs = problem.jobs(first=rnd * problem.replicas)
+        if rnd >= problem.fresh_rounds and results:
+            parents = [r for r in lineage_bests(problem, results)
+                       if not stalled(problem, results, r)][:problem.replicas]
+            legs = problem.continue_jobs(parents, first=rnd * problem.replicas) or []
+            for j, par in zip(legs, parents, strict=True):
+                j.lineage = lineage_of(par)
+                j.leg = 1 + max(r.leg for r in results if lineage_of(r) == j.lineage)
+            jobs = legs + jobs[len(legs):]  # new searches fill the round
         V.checkpoints(jobs)  # a corrupt or foreign checkpoint to resume: CheckpointError now
         new, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress,
                                     isolate=isolate)

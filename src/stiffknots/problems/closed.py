@@ -29,7 +29,12 @@ from stiffknots.problems.base import (
     solve,
 )
 
-DEFAULT_ROUNDS = 6  # rounds of replicas until the lowest state is reached twice
+DEFAULT_ROUNDS = 8  # rounds of replicas until the lowest state is reached by two searches
+#: a continuation leg (rounds after the first two, :func:`stiffknots.problems.base.solve`):
+#: this many basin hops from the search's lowest chain …
+LEG_HOPS = 8
+#: … of this fraction of a replica's moves in all (12 M of the default 15 M at N = 150)
+LEG_FRACTION = 0.8
 
 
 @dataclass
@@ -122,6 +127,29 @@ class ClosedAnneal(Problem):
                                   self._start, lambda r: self.codes[self._start(r)],
                                   self.checkpoint_dir, self.resume, self.checkpoint_seconds,
                                   first)
+
+    def continue_jobs(self, parents: list[Replica], first: int) -> list[Job] | None:
+        """Continue each parent's search by :data:`LEG_HOPS` basin hops from its (polished)
+        chain: the leg's plan is the hop stage of :class:`Schedule` alone — reheat to
+        ``t_hop``, cool geometrically to ``t_end``, quench, polish; the lowest polished chain
+        so far is where the next hop starts. None with a tempering schedule (it has no
+        hops)."""
+        from dataclasses import replace
+
+        sch = self.settings.schedule
+        if sch.kind == "tempering":
+            return None
+        leg = replace(sch, kind="geometric", t_start=sch.t_hop, relax_fraction=0.0,
+                      hops=LEG_HOPS - 1, hop_fraction=(LEG_HOPS - 1) / LEG_HOPS)
+        settings = replace(self.settings, schedule=leg,
+                           moves=V.moves(max(1_000, round(LEG_FRACTION
+                                                          * self.settings.moves))))
+        by_index = dict(enumerate(parents, start=first))
+        return self._replica_jobs(settings, lambda r: by_index[r].coords,
+                                  lambda r: by_index[r].start,
+                                  lambda r: self.codes[by_index[r].start],
+                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds,
+                                  first, count=len(parents))
 
     def state_of(self, r: Replica) -> tuple[str, float]:
         return r.observables["shape"], r.epsilon
