@@ -5,8 +5,8 @@ What a new user gets: for each knot the command is run exactly as typed (N = 150
 basin hops continuing the lowest searches that still improve — until two independent
 searches agree on the lowest state to 0.1 %), and its --json is read: ε of the best replica,
 its shape, the verdict (`converged` and its reason), the rounds used and the wall time.
-Prints one line per knot and a summary; writes bench/defaults_survey.json after every knot and skips the knots already in it
-(delete it to start over).
+Prints one line per knot and a summary; writes bench/defaults_survey.json after every knot and
+skips the knots already in it (delete it to start over).
 
     python bench/defaults_survey.py [KNOT ...]
 """
