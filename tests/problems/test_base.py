@@ -75,9 +75,10 @@ def test_a_search_has_stalled_when_its_last_leg_found_nothing_lower():
     assert not stalled(rule, [a, l1, l2, l3], l3)
 
 
-def test_later_rounds_continue_the_lowest_searches():
-    # rounds 1-2 start searches from the embeddings; round 3 continues the two lowest of them
-    # by basin hops from their polished chains; every replica is verified as 7_4
+def test_later_rounds_continue_the_lowest_search_and_start_new_ones():
+    # rounds 1-2 start searches from the embeddings; round 3 continues the lowest of them by
+    # basin hops from its polished chain (one leg a round) and starts one new search; every
+    # replica is verified as 7_4
     res = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=3)
     first = anneal("7_4", moves=100_000, replicas=2, seed=0, rounds=2)
     if res.converged and res.rounds < 3:
@@ -86,11 +87,12 @@ def test_later_rounds_continue_the_lowest_searches():
     early = sorted((by_id[i] for i in range(4)), key=lambda r: r.epsilon)
     for r in first.replicas:  # the first two rounds are those of a two-round run
         assert np.array_equal(by_id[r.replica].coords, r.coords)
-    legs = [by_id[4], by_id[5]]
-    assert {r.lineage for r in legs} == {early[0].replica, early[1].replica}
-    assert all(r.leg == 1 and r.knot == "7_4" and r.knot_verified for r in legs)
-    for r in legs:  # a leg's result is never above the chain it started from
-        assert r.epsilon <= by_id[r.lineage].epsilon + 1e-9
+    leg, new = by_id[4], by_id[5]
+    assert leg.lineage == early[0].replica and leg.leg == 1
+    assert new.lineage == 5 and new.leg == 0  # a new search fills the round
+    assert all(r.knot == "7_4" and r.knot_verified for r in res.replicas)
+    # a leg never ends above the chain it started from (the start is its first candidate)
+    assert leg.epsilon <= early[0].epsilon + 1e-9
     assert all(by_id[i].lineage == i and by_id[i].leg == 0 for i in range(4))
 
 

@@ -347,6 +347,9 @@ class Problem:
     #: rounds of new searches (replicas from the embeddings) before :func:`solve` continues
     #: the lowest searches instead (problems that implement :meth:`continue_jobs`)
     fresh_rounds: int = 2
+    #: … and then continues this many of them per round (the lowest that still improve);
+    #: the rest of each round's replicas start new searches
+    legs_per_round: int = 1
 
     def continue_jobs(self, parents: list[Replica], first: int) -> list[Job] | None:
         """Jobs that continue the searches of ``parents`` (one job each, replica indices
@@ -499,11 +502,12 @@ def solve(problem: Problem, *, workers: int | None = None,
     (:func:`verdict`) decides: converged — stop; not converged — run another round, up to
     ``problem.rounds`` (easy knots stop early, hard ones get more). The result carries
     ``converged`` and the reason. The first ``problem.fresh_rounds`` rounds start new searches
-    from the embeddings; later rounds, where the problem can (:meth:`Problem.continue_jobs`),
-    continue the ``problem.replicas`` lowest searches instead — each from its lowest chain,
-    by basin hops — so that a hard knot's budget grows per search, not by more short
-    searches: on knots whose minima lie within tenths of a percent of each other, two long
-    searches agree where many short ones each land in another minimum (bench/RESULTS.md).
+    from the embeddings; in later rounds, where the problem can (:meth:`Problem.continue_jobs`),
+    ``problem.legs_per_round`` replicas continue the lowest searches that still improve
+    (:func:`stalled`) — each from its lowest chain, by basin hops — and the others start new
+    searches: on knots whose minima lie within tenths of a percent of each other, a long
+    search walks down to the bottom of its funnel where a short one stops anywhere in it,
+    while new searches keep finding other funnels (bench/RESULTS.md).
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
@@ -533,7 +537,7 @@ def solve(problem: Problem, *, workers: int | None = None,
         jobs = problem.jobs(first=rnd * problem.replicas)
         if rnd >= problem.fresh_rounds and results:
             parents = [r for r in lineage_bests(problem, results)
-                       if not stalled(problem, results, r)][:problem.replicas]
+                       if not stalled(problem, results, r)][:problem.legs_per_round]
             legs = problem.continue_jobs(parents, first=rnd * problem.replicas) or []
             for j, par in zip(legs, parents, strict=True):
                 j.lineage = lineage_of(par)
