@@ -181,8 +181,11 @@ def anneal(
     for col in ("replica", "start", "ε", "shape", "knot", "min seg dist", "acc single",
                 "acc multi", "s"):
         t.add_column(col, justify="right", no_wrap=col in ("replica", "ε"))
+    legs = any(r.leg for r in res.replicas)
+    if legs:
+        t.caption = "↳k: basin hops that continue the search of replica k"
     for r in res.replicas:
-        t.add_row(str(r.replica), str(r.start), f"{r.epsilon:.4f}",
+        t.add_row(str(r.replica), f"↳{r.lineage}" if r.leg else str(r.start), f"{r.epsilon:.4f}",
                   r.observables["shape"],
                   escape(str(r.knot)) + (" ✓" if r.knot_verified else " ✗"),
                   f"{r.min_segment_distance:.3f}", f"{r.acceptance['single']['rate']:.3f}",
