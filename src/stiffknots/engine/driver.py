@@ -81,8 +81,8 @@ from stiffknots.errors import (
 )
 from stiffknots.fileio import atomic_path
 
-__all__ = ["AnnealSettings", "Clock", "ReplicaResult", "Step", "plan_steps", "run_replica",
-           "replica_seeds"]
+__all__ = ["AnnealSettings", "Clock", "ReplicaResult", "Step", "plan_steps", "polishable",
+           "run_replica", "replica_seeds"]
 
 CHECKPOINT_FORMAT = 2
 QUENCH_CHUNKS = 10
@@ -236,8 +236,8 @@ class Step:
     seed + 7919·k. ``t_factor``: the temperature is ``e_ref·temperature·t_factor`` with
     ``e_ref`` the energy per bead at the stage's setup (None: absolute). ``ratchet``: after
     the chunk, lower the curvature limit θ_max to the largest turning angle.
-    ``restore_best`` (a basin hop's first chunk): start the chunk from the lowest quenched
-    chain found so far (the chain is replaced by it; the generator runs on).
+    ``restore_best`` (a basin hop's first chunk): start the chunk from the lowest candidate
+    chain found so far (:func:`_candidate`) (the chain is replaced by it; the generator runs on).
     """
 
     moves: int
@@ -588,7 +588,7 @@ def trace_keys(settings: AnnealSettings) -> tuple[str, ...]:
     return TRACE_KEYS + extra
 
 
-def _polishable(settings: AnnealSettings) -> bool:
+def polishable(settings: AnnealSettings) -> bool:
     """Does the final minimiser apply? (the ``anneal`` plan, the paper's energy E_d, ends that
     do not move)"""
     return (settings.plan == "anneal" and settings.params.energy == "bending"
@@ -719,7 +719,7 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
         ck.written()
         return p
 
-    hopping = settings.schedule.hops > 0 and _polishable(settings)
+    hopping = settings.schedule.hops > 0 and polishable(settings)
     if hopping and resumed is None:
         # with basin hops the starting chain is the first candidate: a run that continues a
         # search (problems.base.solve) never ends above the chain it was given

@@ -48,6 +48,7 @@ from stiffknots.engine.driver import (
     AnnealSettings,
     ReplicaResult,
     default_workers,
+    polishable,
     replica_seeds,
     run_replica,
 )
@@ -193,12 +194,6 @@ def run_job(job: Job) -> Replica:
     return Replica(**fields, knot=found, knot_verified=ok, start=job.start,
                    lineage=job.replica if job.lineage is None else job.lineage, leg=job.leg,
                    knot_check=check, polish=info)
-
-
-def polishable(settings: AnnealSettings) -> bool:
-    """Does the final minimiser apply? (the paper's energy E_d, ends that do not move)"""
-    return (settings.plan == "anneal" and settings.params.energy == "bending"
-            and settings.ensemble.kind in ("closed", "extension"))
 
 
 def polish_run(fields: dict, settings: AnnealSettings) -> tuple[dict, dict | None]:
