@@ -288,3 +288,36 @@ def test_ctrl_c_mid_sweep_exits_130_then_resume(tmp_path):
     before = _rows(tmp_path / "r.db")
     assert before == d["sweep"]["ran"] and 1 <= before < 4
     _check_resumed(tmp_path, before)
+
+
+def test_progress_lines_where_stderr_is_not_a_terminal():
+    """In a log file (no terminal) the bar is not drawn: every finished job prints a line with
+    the jobs done of planned, the elapsed time and the time left, and its result."""
+    import io
+    from types import SimpleNamespace
+
+    from rich.console import Console
+
+    from stiffknots.cli.atlas import SweepProgress
+
+    buf = io.StringIO()
+    bar = SweepProgress(console=Console(file=buf, force_terminal=False, width=200))
+    with bar:
+        bar.started(SimpleNamespace(skipped=1, jobs=4, todo=3))
+        bar.finished(SimpleNamespace(id="3_1/bead/r1"),
+                     {"shape": "CB", "multiplicity": 2, "epsilon": 79.0182}, None)
+        bar.added(2)
+        bar.finished(SimpleNamespace(id="4_1/bead/r0"), None, "boom")
+    lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
+    assert lines[0] == "1 of 4 jobs already stored: skipped"
+    assert " 1/3 jobs, 0:00:00 elapsed, ETA 0:00:00 — 3_1/bead/r1: ε = 79.02 CB(i=2)" in lines[1]
+    assert " 2/5 jobs, " in lines[2] and lines[2].endswith("4_1/bead/r0: failed")
+    assert len(lines) == 3
+    # with --json nothing at all; on a terminal the bar, not the lines
+    quiet = io.StringIO()
+    bar = SweepProgress(disable=True, console=Console(file=quiet, force_terminal=False))
+    with bar:
+        bar.started(SimpleNamespace(skipped=1, jobs=4, todo=3))
+        bar.finished(SimpleNamespace(id="3_1/bead/r1"), None, "x")
+    assert quiet.getvalue() == ""
+    assert not SweepProgress(console=Console(file=io.StringIO(), force_terminal=True)).log_lines

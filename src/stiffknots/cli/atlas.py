@@ -6,6 +6,7 @@ from __future__ import annotations
 import shlex
 import sys
 import threading
+import time
 from typing import Annotated
 
 import typer
@@ -35,15 +36,27 @@ from stiffknots.cli.app import (
 from stiffknots.sweeps import SweepListener
 
 
+def _hms(seconds: float) -> str:
+    s = int(round(seconds))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+
+
 class SweepProgress(SweepListener):
     """A live bar over the sweep's jobs on stderr: jobs done (a running job counts by its
-    moves done), time left, the last job finished. Nothing is shown with ``--json``."""
+    moves done), time left, the last job finished. Where stderr is not a terminal (a log
+    file, a batch job) the bar is not drawn; a line per finished job says the same instead
+    (jobs done of planned, elapsed, time left at the mean pace so far, the job's result).
+    Nothing is shown with ``--json``."""
 
-    def __init__(self, disable: bool = False):
+    def __init__(self, disable: bool = False, console=None):
+        console = err if console is None else console
         self.progress = Progress(
             TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
             TextColumn("jobs"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
-            TextColumn("{task.fields[last]}"), console=err, transient=True, disable=disable)
+            TextColumn("{task.fields[last]}"), console=console, transient=True,
+            disable=disable)
+        self.log_lines = not disable and not console.is_terminal
+        self.t0 = time.monotonic()
         self.task = None
         self.total = 0
         self.done = 0
@@ -60,8 +73,10 @@ class SweepProgress(SweepListener):
 
     def started(self, result) -> None:
         if not self.disable and result.skipped:
-            err.print(f"{result.skipped} of {result.jobs} jobs already stored: skipped",
-                      highlight=False)
+            self.progress.console.print(
+                f"{result.skipped} of {result.jobs} jobs already stored: skipped",
+                highlight=False)
+        self.t0 = time.monotonic()
         self.total = result.todo
         self.task = self.progress.add_task("sweep", total=result.todo, last="")
 
@@ -99,6 +114,13 @@ class SweepProgress(SweepListener):
             else:
                 last = f"{job.id}: failed"
             self._update(escape(last))
+            if self.log_lines:
+                el = time.monotonic() - self.t0
+                left = el * max(self.total - self.done, 0) / self.done
+                self.progress.console.print(
+                    f"{time.strftime('%H:%M:%S')} {self.done}/{self.total} jobs, "
+                    f"{_hms(el)} elapsed, ETA {_hms(left)} — {last}",
+                    markup=False, highlight=False, soft_wrap=True)
 
 
 def _knot_list(text: str | None) -> list[str] | None:
