@@ -98,12 +98,14 @@ def anneal(
     """Anneal a knot to its minimum-energy chain (paper §VII), with verified knot type."""
     from dataclasses import replace
 
+    from stiffknots.engine.driver import default_workers
     from stiffknots.engine.params import MoveParams
     from stiffknots.engine.schedules import SCHEDULES, Schedule
     from stiffknots.knots.starts import STARTS
     from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
     from stiffknots.problems.closed import ClosedAnneal
+    from stiffknots.problems.pool import WorkerPool
 
     replicas, seed = V.replicas(replicas), V.seed(seed)
     if w_over_l is not None:
@@ -150,17 +152,20 @@ def anneal(
     # every input is checked (and the folders claimed) before any work
     checkpoint = claim_checkpoint(checkpoint, resume)
     out_dir = prepare_out(out_dir, overwrite)
-    problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
-                           schedule=sch, params=params, checkpoint_dir=checkpoint,
-                           resume=resume, start=start, rounds=rounds, initial=initial,
-                           polish=polish)
-    if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
-        # (the rounds that start new searches; a continuation's start is known only then)
-        for rnd in range(min(rounds, problem.fresh_rounds)):
-            V.checkpoints(problem.jobs(first=rnd * replicas))
-    with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
-                         disable=json_) as bars:
-        res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
+    # the workers start now and import the solvers while this process builds the problem
+    with WorkerPool(default_workers(replicas)).start() as pool:
+        problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
+                               schedule=sch, params=params, checkpoint_dir=checkpoint,
+                               resume=resume, start=start, rounds=rounds, initial=initial,
+                               polish=polish)
+        if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
+            # (the rounds that start new searches; a continuation's start is known only then)
+            for rnd in range(min(rounds, problem.fresh_rounds)):
+                V.checkpoints(problem.jobs(first=rnd * replicas))
+        with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
+                             disable=json_) as bars:
+            res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True,
+                        pool=pool)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None
     check_interrupted(res, hint)
     width = width_of(params, beads)

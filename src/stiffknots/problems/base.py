@@ -57,7 +57,7 @@ from stiffknots.errors import TopologyChangedError
 from stiffknots.fileio import write_bytes, write_json
 from stiffknots.formats import save
 from stiffknots.problems import validate as V
-from stiffknots.problems.pool import run_jobs
+from stiffknots.problems.pool import WorkerPool, run_jobs
 
 
 @dataclass
@@ -489,7 +489,7 @@ def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
 def solve(problem: Problem, *, workers: int | None = None,
           on_replica_done: Callable[[Replica], None] | None = None,
           on_progress: Callable[[dict], None] | None = None,
-          isolate: bool = False) -> ReplicaSet:
+          isolate: bool = False, pool: WorkerPool | None = None) -> ReplicaSet:
     """Run every job of ``problem`` on ``workers`` processes (default: all cores) and return
     its verified replicas, best first.
 
@@ -508,7 +508,10 @@ def solve(problem: Problem, *, workers: int | None = None,
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
     "best"}`` (moves done and planned, current and lowest ε) from the workers. ``isolate``
     runs even a single replica in a worker process, so that Ctrl-C stops it at once (the
-    command line does; :func:`~stiffknots.problems.pool.run_jobs`).
+    command line does; :func:`~stiffknots.problems.pool.run_jobs`). Every round runs on the
+    same worker processes: ``pool`` (a :class:`~stiffknots.problems.pool.WorkerPool` of
+    ``workers`` processes, which the caller may have started before it built the problem, and
+    closes) or one this call starts when a round first needs a worker and stops at its end.
 
     Raises
     ------
@@ -525,6 +528,30 @@ def solve(problem: Problem, *, workers: int | None = None,
         if on_replica_done is not None:
             on_replica_done(r)
 
+    own = pool is None
+    if own:
+        pool = WorkerPool(nw)  # started by the first round that needs a worker
+    try:
+        results, interrupted, converged, reason, rounds = _rounds(
+            problem, nw, done, on_progress, isolate, pool)
+    finally:
+        if own:
+            pool.close()
+    if not converged and not interrupted and problem.rounds > 1:
+        reason += f" after {rounds} rounds (the budget)"
+    results.sort(key=problem.sort_key)
+    return problem.result_type(
+        knot=problem.knot_name, beads=problem.beads, seed=problem.seed,
+        settings=problem.settings_dict(), replicas=results,
+        wall_time=time.perf_counter() - t0, interrupted=interrupted,
+        bounds=problem.bounds(), converged=converged, convergence=reason, rounds=rounds,
+        **problem.result_fields(results))
+
+
+def _rounds(problem: Problem, nw: int, done: Callable[[Replica], None],
+            on_progress: Callable[[dict], None] | None, isolate: bool, pool: WorkerPool
+            ) -> tuple[list[Replica], bool, bool, str, int]:
+    """The rounds of :func:`solve`: (replicas, interrupted, converged, reason, rounds)."""
     results: list[Replica] = []
     interrupted = False
     converged, reason, rounds = False, "no replica finished", 0
@@ -540,7 +567,7 @@ def solve(problem: Problem, *, workers: int | None = None,
             jobs = legs + jobs[len(legs):]  # new searches fill the round
         V.checkpoints(jobs)  # a corrupt or foreign checkpoint to resume: CheckpointError now
         new, interrupted = run_jobs(run_job, [(j,) for j in jobs], nw, done, on_progress,
-                                    isolate=isolate)
+                                    isolate=isolate, pool=pool)
         bad = [r for r in new if not r.knot_verified]
         if bad:
             raise TopologyChangedError(
@@ -552,12 +579,4 @@ def solve(problem: Problem, *, workers: int | None = None,
         converged, reason = verdict(problem, results)
         if interrupted or converged:
             break
-    if not converged and not interrupted and problem.rounds > 1:
-        reason += f" after {rounds} rounds (the budget)"
-    results.sort(key=problem.sort_key)
-    return problem.result_type(
-        knot=problem.knot_name, beads=problem.beads, seed=problem.seed,
-        settings=problem.settings_dict(), replicas=results,
-        wall_time=time.perf_counter() - t0, interrupted=interrupted,
-        bounds=problem.bounds(), converged=converged, convergence=reason, rounds=rounds,
-        **problem.result_fields(results))
+    return results, interrupted, converged, reason, rounds

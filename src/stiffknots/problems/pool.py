@@ -110,15 +110,118 @@ def _drain(q, on_progress: Callable[[dict], None]) -> None:
         on_progress(item)
 
 
+def _warm() -> int:
+    """Import, in a fresh worker, what every job needs (the solvers, the engine, the knot
+    check's topoly: about 2 s), so that it happens while the parent builds its problem."""
+    import stiffknots.problems.base  # noqa: F401  (the engine and the kernels)
+    from stiffknots.knots.identify import _topoly
+
+    _topoly()
+    return os.getpid()
+
+
+class WorkerPool:
+    """Worker processes kept for a whole solve: its rounds run on the same processes.
+
+    A fresh process costs about 2 s before its first move (the interpreter, numpy, numba's
+    cached kernels, topoly for the knot check) — per round, when every round spawned its own
+    (a knot that took 8 rounds spent ≈ 20 s of ≈ 100 s there). :meth:`start` spawns the
+    workers and has them import the solvers, so a caller may start the pool before it builds
+    its problem (the embeddings, the knot's HOMFLY-PT) and both happen at once; otherwise the
+    first :meth:`run` starts it. A job's exception, a dead worker or Ctrl-C stop the pool
+    (the running workers are killed); :meth:`close` stops it at the end.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes (≥ 1).
+    """
+
+    def __init__(self, workers: int):
+        self.workers = max(1, int(workers))
+        self._ex: ProcessPoolExecutor | None = None
+        self._q = None
+        self._warming: list = []
+        self.dead = False
+
+    def start(self) -> WorkerPool:
+        """Spawn the workers now (they import the solvers in the background)."""
+        if self._ex is None and not self.dead:
+            ctx = mp.get_context("spawn")
+            self._q = ctx.Queue()
+            self._ex = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
+                                           initializer=_worker_init,
+                                           initargs=(os.getpid(), self._q))
+            with _ctrl_c_held():  # the workers are spawned here, by submit
+                self._warming = [self._ex.submit(_warm) for _ in range(self.workers)]
+        return self
+
+    def __enter__(self) -> WorkerPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def run(self, job: Callable[..., Any], arg_list: Sequence[tuple],
+            on_done: Callable[[Any], None] | None = None,
+            on_progress: Callable[[dict], None] | None = None) -> tuple[list[Any], bool]:
+        """``job(*args)`` for every ``args`` on the workers: (results in completion order,
+        interrupted); see :func:`run_jobs`."""
+        if self.dead:
+            raise RuntimeError("this worker pool was stopped (Ctrl-C or an error)")
+        self.start()
+        sink = on_progress or (lambda info: None)
+        results: list[Any] = []
+        ok = False
+        try:
+            with _ctrl_c_held():
+                pending = {self._ex.submit(job, *args) for args in arg_list}
+            while pending:
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                _drain(self._q, sink)
+                for f in done:
+                    try:
+                        res = f.result()  # re-raises a job's exception here
+                    except BrokenProcessPool:
+                        raise WorkerError("a worker process died (a crash or the out-of-memory "
+                                          "killer) before its replica finished") from None
+                    results.append(res)
+                    if on_done:
+                        on_done(res)
+            _drain(self._q, sink)
+            ok = True
+        except KeyboardInterrupt:
+            self.close()
+            return results, True
+        finally:
+            if not ok:
+                self.close()
+        return results, False
+
+    def close(self) -> None:
+        """Stop the workers (at once: a running job is killed) and release the queue."""
+        if self._ex is not None:
+            _terminate(self._ex)
+            self._ex = None
+        if self._q is not None:
+            _drain(self._q, lambda info: None)
+            self._q.close()
+            self._q.join_thread()
+            self._q = None
+        self.dead = True
+
+
 def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
              on_done: Callable[[Any], None] | None = None,
              on_progress: Callable[[dict], None] | None = None,
-             isolate: bool = False) -> tuple[list[Any], bool]:
+             isolate: bool = False, pool: WorkerPool | None = None) -> tuple[list[Any], bool]:
     """Run ``job(*args)`` for every ``args`` in ``arg_list`` on ``workers`` processes.
 
     One worker (or one job) runs in this process, unless ``isolate``: then it runs in a worker
     process too, so that Ctrl-C stops it at once — in this process a compiled kernel sees
-    Ctrl-C only when its chunk of moves ends (minutes for a large number of moves).
+    Ctrl-C only when its chunk of moves ends (minutes for a large number of moves). ``pool``
+    (a :class:`WorkerPool`, e.g. kept over the rounds of a solve) runs the jobs; without one,
+    a pool is started for this call and stopped after it.
 
     Returns
     -------
@@ -141,37 +244,10 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
         finally:
             _PROGRESS = None
         return results, False
-    ctx = mp.get_context("spawn")
-    q = ctx.Queue() if on_progress is not None else None
-    nproc = max(1, min(workers, len(arg_list)))
-    ex = ProcessPoolExecutor(max_workers=nproc, mp_context=ctx,
-                             initializer=_worker_init, initargs=(os.getpid(), q))
-    interrupted = False
-    try:
-        with _ctrl_c_held():  # the workers are spawned here, by submit
-            pending = {ex.submit(job, *args) for args in arg_list}
-        while pending:
-            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-            if q is not None:
-                _drain(q, on_progress)
-            for f in done:
-                try:
-                    res = f.result()  # re-raises a job's exception here
-                except BrokenProcessPool:
-                    raise WorkerError("a worker process died (a crash or the out-of-memory "
-                                      "killer) before its replica finished") from None
-                results.append(res)
-                if on_done:
-                    on_done(res)
-    except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        _terminate(ex)
-        if q is not None:
-            _drain(q, on_progress)
-            q.close()
-            q.join_thread()
-    return results, interrupted
+    if pool is not None:
+        return pool.run(job, arg_list, on_done, on_progress)
+    with WorkerPool(max(1, min(workers, len(arg_list)))) as own:
+        return own.run(job, arg_list, on_done, on_progress)
 
 
 def _terminate(ex: ProcessPoolExecutor) -> None:
