@@ -321,3 +321,8 @@ def test_progress_lines_where_stderr_is_not_a_terminal():
         bar.finished(SimpleNamespace(id="3_1/bead/r1"), None, "x")
     assert quiet.getvalue() == ""
     assert not SweepProgress(console=Console(file=io.StringIO(), force_terminal=True)).log_lines
+    # every method a sweep calls (SweepProgress is no subclass: the CLI starts without Dask)
+    from stiffknots.sweeps import SweepListener
+
+    hooks = [k for k, v in vars(SweepListener).items() if callable(v) and not k.startswith("_")]
+    assert len(hooks) == 5 and all(callable(getattr(SweepProgress, k)) for k in hooks)

@@ -124,3 +124,12 @@ def test_anneal_command_defaults_are_the_library_defaults():
     assert sig.parameters["rounds"].default == DEFAULT_ROUNDS
     assert sig.parameters["schedule"].default == Schedule().kind
     assert sig.parameters["replicas"].default == 2
+
+
+def test_the_command_line_starts_without_dask():
+    """Every command imports the command line; Dask (≈ 1 s of imports) only the atlas's run."""
+    code = ("import sys, stiffknots.cli.main; "
+            "print(sorted(m for m in ('distributed', 'dask', 'topoly') if m in sys.modules))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip() == "[]"

@@ -33,7 +33,6 @@ from stiffknots.cli.app import (
     prepare_file,
     prepare_folder,
 )
-from stiffknots.sweeps import SweepListener
 
 
 def _hms(seconds: float) -> str:
@@ -41,12 +40,14 @@ def _hms(seconds: float) -> str:
     return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
 
-class SweepProgress(SweepListener):
+class SweepProgress:
     """A live bar over the sweep's jobs on stderr: jobs done (a running job counts by its
     moves done), time left, the last job finished. Where stderr is not a terminal (a log
     file, a batch job) the bar is not drawn; a line per finished job says the same instead
     (jobs done of planned, elapsed, time left at the mean pace so far, the job's result).
-    Nothing is shown with ``--json``."""
+    Nothing is shown with ``--json``. It has every method of
+    :class:`stiffknots.sweeps.SweepListener` without being a subclass, so that the command
+    line starts without importing Dask."""
 
     def __init__(self, disable: bool = False, console=None):
         console = err if console is None else console
