@@ -178,3 +178,24 @@ def test_replicas_added_until_converged(tmp_path):
         assert (res2.ran, res2.workers, st.count()) == (0, 0, n)
         # the added replicas count as stored (or are not needed: the 4 agree by now)
         assert res2.skipped == res2.jobs and res2.jobs in (4, res.jobs)
+
+
+def test_added_replicas_run_before_later_knots(tmp_path):
+    """The knots finish in the order planned: the replicas added to 7_4 (its first two
+    disagree at the tiny budget) run before the first replicas of the knots after it, so a
+    sweep stopped early has whole answers for the knots it reached."""
+    import sqlite3
+
+    models = parse_models("bead")
+    with Store(tmp_path / "s.db") as st:
+        res = run_sweep(["7_4", "3_1", "5_1", "5_2"], models, budget_of("tiny"), st, seed=0,
+                        workers=1, max_replicas=4)
+        assert not res.failed and res.added > 0, "nothing added: the test tested nothing"
+    con = sqlite3.connect(tmp_path / "s.db")
+    order = list(con.execute("SELECT knot, replica FROM replicas ORDER BY rowid"))
+    con.close()
+    # 4 jobs are submitted at a time (7_4 r0, r1, 3_1 r0, r1); 7_4 r0 ends → 5_1 r0 is
+    # submitted; 7_4 r1 ends → 7_4's added replicas go first, ahead of 5_1 r1 and 5_2 (they
+    # went after them, at the end of the plan, before)
+    assert order.index(("7_4", 2)) < order.index(("5_1", 1)), order
+    assert order.index(("7_4", 3)) < order.index(("5_2", 0)), order

@@ -254,10 +254,14 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                 return new
         return []
 
+    # replicas added to a (knot, model) run before the jobs of later knots, so that the knots
+    # are finished in the order planned: a sweep stopped after an hour has whole answers for
+    # the knots it reached, not two replicas of every knot (the results do not depend on the
+    # order: every replica's seed and settings are its key's)
     feed: deque[SweepJob] = deque(todo)
-    for g in groups.values():
+    for g in reversed(list(groups.values())):
         if g["open"] == 0:
-            feed.extend(extend(g))
+            feed.extendleft(reversed(extend(g)))
     listener.started(res)
     if not feed:
         res.wall_seconds = time.perf_counter() - t0
@@ -316,7 +320,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             if g["open"] == 0 and not res.interrupted:
                 new = extend(g)
                 if new:
-                    feed.extend(new)
+                    feed.extendleft(reversed(new))
                     listener.added(len(new))
 
         try:
