@@ -5,10 +5,11 @@ What a new user gets: for each knot the command is run exactly as typed (N = 150
 basin hops continuing the lowest searches that still improve — until two independent
 searches agree on the lowest state to 0.1 %), and its --json is read: ε of the best replica,
 its shape, the verdict (`converged` and its reason), the rounds used and the wall time.
-Prints one line per knot and a summary; writes bench/defaults_survey.json after every knot and
-skips the knots already in it (delete it to start over).
+Prints one line per knot and a summary; writes bench/defaults_survey.json (or ``--out FILE``)
+after every knot, with every replica's search (lineage, leg), start, ε and shape, and skips the
+knots already in it (delete it to start over).
 
-    python bench/defaults_survey.py [KNOT ...]
+    python bench/defaults_survey.py [--out FILE] [KNOT ...]
 """
 
 from __future__ import annotations
@@ -22,9 +23,18 @@ from pathlib import Path
 from stiffknots.knots.catalogue import catalogue
 
 
+def _replica(r: dict) -> dict:
+    obs = r.get("observables") or {}
+    return {"replica": r.get("replica"), "lineage": r.get("lineage"), "leg": r.get("leg"),
+            "start": r.get("start"), "epsilon": r.get("epsilon"), "shape": obs.get("label"),
+            "wall_s": r.get("wall_time"), "cpu_s": r.get("cpu_time")}
+
+
 def main(argv: list[str]) -> None:
-    knots = argv or [k.name for k in catalogue() if 3 <= k.crossing_number <= 8]
     path = Path(__file__).with_name("defaults_survey.json")
+    if argv[:1] == ["--out"]:
+        path, argv = Path(argv[1]), argv[2:]
+    knots = argv or [k.name for k in catalogue() if 3 <= k.crossing_number <= 8]
     # resumable: the knots already in the file are kept and not run again
     rows = json.loads(path.read_text()) if path.exists() else []
     done = {r["knot"] for r in rows}
@@ -45,7 +55,8 @@ def main(argv: list[str]) -> None:
                "shape": d.get("shape"), "converged": d.get("converged"),
                "reason": d.get("convergence"), "rounds": d.get("rounds"),
                "replicas": len(d.get("replicas", [])), "wall_s": round(wall, 1),
-               "width": d.get("width")}
+               "width": d.get("width"),
+               "searches": [_replica(r) for r in d.get("replicas", [])]}
         rows.append(row)
         path.write_text(json.dumps(rows, indent=2))
         print(f"{name:6s} ε = {row['epsilon']:9.3f}  {str(row['shape']):7s} "
