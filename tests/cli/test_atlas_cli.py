@@ -165,6 +165,13 @@ def test_db_states_and_grounds(tmp_path):
     assert len(csv.read_text().splitlines()) == 4
     rc, out, err = cli("db", "--db", str(db), "grounds")
     assert rc == 0 and "CB(i=2)" in out
+    # one width per model: named once below the table, every row on one line of ≤ 80 columns
+    lines = out.splitlines()
+    assert "bead: bead rule d = 1/√2, N = 150 (w/L ≈ 0.0047)" in lines
+    assert any(ln.startswith("tube: tube w = 1/√2, N = 150") for ln in lines)
+    rows = [ln for ln in lines if ln.startswith("│")]
+    assert len(rows) == 3 and all(len(ln) <= 80 for ln in lines)
+    assert "80 147.00 ×1" in rows[2]  # 4_1 bead: its metastable 80
 
 
 @pytest.mark.parametrize("args", [

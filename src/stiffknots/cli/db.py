@@ -116,16 +116,31 @@ def grounds(
         dump({"db": str(ctx.obj["db"]), "csv": None if path is None else str(path),
               "converged_rule": CONVERGENCE_RULE, "grounds": rows})
         return
-    t = Table(title=f"ground states in {ctx.obj['db']}")
-    for col in ("knot", "width", "state", "ε", "replicas", "converged", "metastable"):
-        t.add_column(col, justify="right" if col in ("ε", "replicas") else "left")
+    # a model whose rows share one width is named alone in its column, the width said below
+    # the table (the table then keeps to 80 columns in a pipe or a log)
+    widths: dict[str, set[str]] = {}
     for r in rows:
-        t.add_row(escape(r["knot"]),
-                  escape(_width(r["exclusion"], r["thickness"], r["beads"], "short")),
-                  escape(r["state"]),
+        widths.setdefault(r["exclusion"], set()).add(r["width"])
+    one = {ex: next(iter(w)) for ex, w in widths.items() if len(w) == 1}
+    t = Table(title=f"ground states in {ctx.obj['db']}",
+              caption="metastable: the lowest other state, (+k) more (stiffknots db states K)")
+    for col in ("knot", "model", "state", "ε", "replicas", "converged", "metastable"):
+        t.add_column(col, justify="right" if col in ("ε", "replicas") else "left",
+                     no_wrap=col in ("knot", "state", "ε"))
+    for r in rows:
+        model = "bead" if r["exclusion"] == "bead" else "tube"
+        width = model if r["exclusion"] in one else _width(r["exclusion"], r["thickness"],
+                                                           r["beads"], "short")
+        meta = [m.strip() for m in (r["metastable"] or "").split(";") if m.strip()]
+        meta_text = (meta[0] + (f" (+{len(meta) - 1})" if len(meta) > 1 else "")
+                     if meta else "—")
+        t.add_row(escape(r["knot"]), escape(width), escape(r["state"]),
                   f"{r['epsilon']:.3f}", f"{r['count']}/{r['replicas']}",
-                  "yes" if r["converged_rule"] else "no", escape(r["metastable"] or "—"))
+                  "yes" if r["converged_rule"] else "no", escape(meta_text))
     out.print(t)
+    for ex in sorted(one):
+        out.print(f"{'bead' if ex == 'bead' else 'tube'}: {one[ex]}", highlight=False,
+                  markup=False)
     out.print(f"converged: {CONVERGENCE_RULE}", highlight=False, markup=False)
     if path is not None:
         out.print(f"CSV: {path}", highlight=False, markup=False)
