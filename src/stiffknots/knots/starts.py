@@ -11,6 +11,8 @@ the start only chooses the basin it is searched from.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = ["ALL_STARTS", "STARTS", "available_starts", "resolve_starts", "split_replicas",
@@ -32,6 +34,26 @@ def start_chain(knot, start: str = "braid", n_beads: int = 150) -> np.ndarray:
     EmbeddingError
         If that start does not exist for this knot or does not fit in ``n_beads`` beads.
     """
+    if start not in STARTS:
+        raise ValueError(f"unknown start {start!r}; choose one of {', '.join(STARTS)}")
+    try:
+        hash(knot)
+    except TypeError:  # not a catalogue entry (a stand-in): built every time
+        return _build(knot, start, int(n_beads))
+    return _built(knot, start, int(n_beads)).copy()
+
+
+@functools.lru_cache(maxsize=32)
+def _built(knot, start: str, n_beads: int) -> np.ndarray:
+    """:func:`start_chain`, built once per process (the embeddings are deterministic; the 80
+    is a search of seconds, asked for by :func:`available_starts` and again by the problem,
+    and by every problem of the same knot in a sweep's worker). Read-only; callers get copies."""
+    x = _build(knot, start, n_beads)
+    x.setflags(write=False)
+    return x
+
+
+def _build(knot, start: str, n_beads: int) -> np.ndarray:
     if start == "braid":
         from stiffknots.knots.embedding import embed_braid
 

@@ -1,0 +1,36 @@
+"""Starting chains are built once per process and handed out as copies."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from stiffknots.knots.catalogue import get_knot
+from stiffknots.knots.starts import _built, start_chain
+
+
+def test_a_start_is_built_once_and_handed_out_as_copies():
+    k = get_knot("5_2")
+    _built.cache_clear()
+    a = start_chain(k, "cage")
+    assert _built.cache_info().misses == 1
+    b = start_chain(k, "cage")
+    assert _built.cache_info().hits == 1  # the second ask is not built again
+    assert a is not b and np.array_equal(a, b) and a.flags.writeable
+    a[:] = 0.0  # a caller's copy: the cached chain is untouched
+    assert np.array_equal(start_chain(k, "cage"), b)
+    bonds = np.linalg.norm(np.roll(b, -1, axis=0) - b, axis=1)
+    assert np.allclose(bonds, 1.0) and len(b) == 150
+
+
+def test_unknown_start_and_a_stand_in_knot():
+    with pytest.raises(ValueError, match="unknown start 'spiral'"):
+        start_chain(get_knot("3_1"), "spiral")
+    k = get_knot("3_1")
+    stand_in = SimpleNamespace(braid_word=list(k.braid_word), braid_strands=k.braid_strands)
+    with pytest.raises(TypeError):
+        hash(stand_in.braid_word)
+    x = start_chain(stand_in, "braid")  # not hashable by its fields' lists: built, not cached
+    assert np.array_equal(x, start_chain(k, "braid"))
