@@ -34,3 +34,23 @@ def test_unknown_start_and_a_stand_in_knot():
         hash(stand_in.braid_word)
     x = start_chain(stand_in, "braid")  # not hashable by its fields' lists: built, not cached
     assert np.array_equal(x, start_chain(k, "braid"))
+
+
+def test_default_starts_are_the_shapes_conjectured_for_the_knot():
+    from stiffknots.knots.starts import default_starts
+
+    assert default_starts(get_knot("3_1")) == ["braid"]  # n = i: its circular braid
+    assert default_starts(get_knot("7_4")) == ["braid"]  # in no family
+    assert default_starts(get_knot("5_2")) == ["braid", "cage", "eighty"]  # [32]: cage, 80
+    assert default_starts(get_knot("6_3")) == ["braid", "eighty"]  # 80 family, no cage
+
+
+def test_later_rounds_take_the_starts_the_first_did_not():
+    """Two replicas a round, three starts: round 2 starts from the 80 the first round lacked."""
+    from stiffknots.problems.closed import ClosedAnneal
+
+    p = ClosedAnneal("5_2", moves=20_000, replicas=2, rounds=3)
+    starts = [j.start for rnd in range(3) for j in p.jobs(first=2 * rnd)]
+    assert starts == ["braid", "cage", "eighty", "braid", "cage", "eighty"]
+    q = ClosedAnneal("5_2", moves=20_000, replicas=2, rounds=2, start="cage")
+    assert [j.start for j in q.jobs(first=2)] == ["cage", "cage"]

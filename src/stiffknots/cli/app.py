@@ -63,9 +63,10 @@ OutOpt = Annotated[str | None, typer.Option(
 OverwriteOpt = Annotated[bool, typer.Option(
     "--overwrite", help="Replace the results of an earlier run in --out.")]
 StartOpt = Annotated[str, typer.Option(
-    help="Starting embedding: all (braid and cage where they exist, shared among the "
-         "replicas), braid (closure of KnotInfo's braid word), cage (4-fold cage of a two-box "
-         "rational knot [ab]: 4_1, 5_2, 6_1, ...) or eighty (an 8 plus a circle).")]
+    help="Starting embedding: all (braid, cage where it exists, eighty for the 80 family; "
+         "the replicas take them in turn over the rounds), braid (closure of KnotInfo's braid "
+         "word), cage (4-fold cage of a two-box rational knot [ab]: 4_1, 5_2, 6_1, ...) or "
+         "eighty (an 8 plus a circle).")]
 CheckpointOpt = Annotated[str | None, typer.Option(
     "--checkpoint", help="Write a checkpoint of every replica to this folder.")]
 PolishOpt = Annotated[bool, typer.Option(

@@ -4,9 +4,11 @@
 (:func:`stiffknots.knots.embedding.embed_braid`); ``cage`` is the 4-fold cage of a two-box
 rational knot (:func:`stiffknots.knots.cage_embedding.embed_cage`); ``eighty`` is an "80", a
 figure eight with a circle along one lobe (:func:`stiffknots.knots.eighty_embedding.embed_eighty`,
-found by a search over a parametrised family, slower to build). ``all`` means the
-:data:`ALL_STARTS` that exist for the knot. The annealing decides the final shape and energy;
-the start only chooses the basin it is searched from.
+found by a search over a parametrised family, slower to build). ``all`` means the starts
+that exist for the knot among braid and cage, and the 80 for the knots of the 80 family
+(:func:`default_starts`; the same rule for ``anneal``, ``tightest`` and the atlas's sweeps),
+taken by the replicas in turn over the rounds. The annealing decides the final shape and
+energy; the start only chooses the basin it is searched from.
 """
 
 from __future__ import annotations
@@ -15,12 +17,13 @@ import functools
 
 import numpy as np
 
-__all__ = ["ALL_STARTS", "STARTS", "available_starts", "resolve_starts", "split_replicas",
-           "start_chain"]
+__all__ = ["ALL_STARTS", "STARTS", "available_starts", "default_starts", "resolve_starts",
+           "split_replicas", "start_chain"]
 
 #: Names of the starting embeddings.
 STARTS = ("braid", "cage", "eighty")
-#: The starts that ``start='all'`` draws from (``eighty`` is opt-in: its search is slower).
+#: The starts that ``start='all'`` draws from where they exist; ``eighty`` only for the knots
+#: of the 80 family with n ≠ i (:func:`default_starts`).
 ALL_STARTS = ("braid", "cage")
 
 
@@ -88,6 +91,30 @@ def available_starts(knot, n_beads: int = 150, starts=ALL_STARTS) -> list[str]:
     return out
 
 
+def default_starts(knot, n_beads: int = 150) -> list[str]:
+    """The starts of ``start='all'``, in the order the replicas take them (replica r the
+    (r mod k)-th): the braid closure, the 4-fold cage where the knot is a two-box rational
+    knot, and the 80 where the knot is of the 80 family (n ≠ i: an n = i knot's ground state
+    is its circular braid) — the embeddings of the shapes §VII conjectures for it. Measured:
+    the knots of the 80 family reached lower states from the 80 (8_8, 226.9 against 231.7
+    from braid and cage alone; bench/RESULTS.md).
+
+    Raises
+    ------
+    EmbeddingError
+        No start fits in ``n_beads`` beads (the braid closure's message says how many).
+    """
+    from stiffknots.knots.families import EIGHTY_FAMILY
+
+    tried = list(ALL_STARTS)
+    if knot.name in EIGHTY_FAMILY and not knot.n_equals_i:
+        tried.append("eighty")
+    found = available_starts(knot, n_beads, tried)
+    if not found:
+        start_chain(knot, "braid", n_beads)  # raises, saying why
+    return found
+
+
 def split_replicas(starts: list[str], replicas: int) -> list[str]:
     """Assign ``replicas`` replicas to ``starts`` round-robin (replica r gets start r mod k)."""
     if not starts:
@@ -113,10 +140,7 @@ def resolve_starts(knot, start, replicas: int, n_beads: int = 150) -> list[str]:
     """
     if isinstance(start, str):
         if start == "all":
-            found = available_starts(knot, n_beads)
-            if not found:  # none fits: the braid closure's error says how many beads it needs
-                start_chain(knot, "braid", n_beads)
-            return split_replicas(found, replicas)
+            return split_replicas(default_starts(knot, n_beads), replicas)
         if start not in STARTS:
             raise ValueError(f"unknown start {start!r}; choose all or one of {', '.join(STARTS)}")
         return [start] * replicas

@@ -385,11 +385,17 @@ class Problem:
         return self.starts[r % len(self.starts)]
 
     def _closed_starts(self, start) -> None:
-        """One starting embedding per replica (``self.starts``), their chains and their
-        checked knot polynomials."""
-        from stiffknots.knots.starts import resolve_starts, start_chain
+        """The starting embeddings the replicas take in turn (``self.starts``: replica r, of
+        any round, the (r mod k)-th — with ``'all'`` every start of
+        :func:`~stiffknots.knots.starts.default_starts`, so that later rounds start from the
+        starts the first did not reach; given starts, one per replica of a round), their
+        chains and their checked knot polynomials."""
+        from stiffknots.knots.starts import default_starts, resolve_starts, start_chain
 
-        self.starts = resolve_starts(self.knot, start, self.replicas, self.beads)
+        if isinstance(start, str) and start == "all":
+            self.starts = default_starts(self.knot, self.beads)
+        else:
+            self.starts = resolve_starts(self.knot, start, self.replicas, self.beads)
         self.chains = {st: start_chain(self.knot, st, self.beads)
                        for st in dict.fromkeys(self.starts)}
         self.codes = {st: start_code(self.knot_name, x, True, st)

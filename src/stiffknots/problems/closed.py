@@ -221,9 +221,10 @@ def anneal(
     checkpoint_seconds : wall-clock seconds between checkpoints (None: chunks only).
     start : starting embedding: ``'braid'`` (closure of KnotInfo's braid word), ``'cage'``
         (the 4-fold cage of a two-box rational knot [ab], §VII; see
-        :mod:`stiffknots.knots.starts`), ``'eighty'``, ``'all'`` (the default: every start
-        that exists for the knot among braid and cage, shared round-robin among the
-        replicas), or one start per replica (a sequence of ``replicas`` names). Recorded in
+        :mod:`stiffknots.knots.starts`), ``'eighty'``, ``'all'`` (the default: braid, the cage
+        where it exists and the 80 for the knots of the 80 family,
+        :func:`stiffknots.knots.starts.default_starts`; replica r of any round takes the
+        (r mod k)-th), or one start per replica (a sequence of ``replicas`` names). Recorded in
         the settings and in every replica.
     rounds, agree, rel_tol : the convergence rule: after each round of ``replicas`` replicas,
         the run stops when the lowest state (its shape class and ε within ``rel_tol``) was

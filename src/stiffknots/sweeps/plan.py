@@ -184,15 +184,9 @@ def sweep_starts(knot: Any, beads: int, replicas: int) -> list[str]:
     EmbeddingError
         No start fits in ``beads`` beads (the braid closure's message says how many it needs).
     """
-    from stiffknots.knots.families import EIGHTY_FAMILY
-    from stiffknots.knots.starts import available_starts, split_replicas, start_chain
+    from stiffknots.knots.starts import default_starts, split_replicas
 
-    tried = ["braid", "cage"]
-    if knot.name in EIGHTY_FAMILY and not knot.n_equals_i:
-        tried.append("eighty")
-    found = available_starts(knot, beads, tried)
-    if not found:
-        start_chain(knot, "braid", beads)  # raises, saying why
+    found = default_starts(knot, beads)
     return split_replicas(found, replicas)
 
 
