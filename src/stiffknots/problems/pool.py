@@ -111,9 +111,9 @@ def _drain(q, on_progress: Callable[[dict], None]) -> None:
 
 
 def _warm() -> int:
-    """Import, in a fresh worker, what every job needs (the solvers, the engine, the knot
+    """Import, in a fresh worker, what every job needs (the engine and its kernels, the knot
     check's topoly: about 2 s), so that it happens while the parent builds its problem."""
-    import stiffknots.problems.base  # noqa: F401  (the engine and the kernels)
+    import stiffknots.engine.driver  # noqa: F401
     from stiffknots.knots.identify import _topoly
 
     _topoly()
