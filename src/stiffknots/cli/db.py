@@ -105,7 +105,7 @@ def grounds(
         rows = ground_table(store)
     for r in rows:
         r["width"] = _width(r["exclusion"], r["thickness"], r["beads"])
-        r["converged_rule"] = is_converged({"count": r["count"], "epsilon": r["epsilon"]})
+        r["converged_rule"] = is_converged(r)
     path = None
     if csv is not None:
         try:

@@ -515,7 +515,8 @@ class Store:
             ``"4C"``, ...), ``shape``, ``multiplicity``, ``epsilon`` (lowest), ``eps_mean``,
             ``eps_max``, ``count``, ``representative`` (row id of the lowest-ε replica) and
             its ``seed``, ``replica``, ``start``, ``min_segment_distance``, ``converged``,
-            ``knot_verified``; ``converged_count``; ``starts`` (start → count); ``ids``.
+            ``knot_verified``; ``converged_count``; ``eps_all`` (every member's ε,
+            increasing); ``starts`` (start → count); ``ids``.
 
         Raises
         ------
@@ -569,6 +570,7 @@ class Store:
                 "min_segment_distance": rep["min_segment_distance"],
                 "converged": rep["converged"], "knot_verified": rep["knot_verified"],
                 "converged_count": sum(m["converged"] is True for m in members),
+                "eps_all": sorted(float(m["epsilon"]) for m in members),
                 "starts": dict(Counter(m["start"] or "unknown" for m in members)),
                 "ids": [m["id"] for m in members],
             })
@@ -598,7 +600,7 @@ class Store:
         list of dict
             One per knot × exclusion × beads × thickness, in knot-table order: ``knot``,
             ``exclusion``, ``beads``, ``thickness``, ``w_over_L``, ``state`` (name), ``shape``,
-            ``multiplicity``, ``epsilon``, ``eps_mean``, ``count``, ``replicas``,
+            ``multiplicity``, ``epsilon``, ``eps_mean``, ``count``, ``eps_all``, ``replicas``,
             ``n_states``, ``metastable`` (``"80 147.30 ×3; CB(i=3) 181.20 ×1"``), ``id``,
             ``seed``, ``replica``, ``start``, ``min_segment_distance``, ``converged``,
             ``knot_verified``, ``settings_hash``, ``n_settings``, ``problem``, ``version``.
@@ -623,6 +625,7 @@ class Store:
                 "thickness": best["thickness"], "w_over_L": best["w_over_L"],
                 "state": gs["name"], "shape": gs["shape"], "multiplicity": gs["multiplicity"],
                 "epsilon": gs["epsilon"], "eps_mean": gs["eps_mean"], "count": gs["count"],
+                "eps_all": gs["eps_all"],
                 "replicas": best["replicas"], "n_states": 1 + len(best["metastable"]),
                 "metastable": "; ".join(f"{s['name']} {s['epsilon']:.2f} ×{s['count']}"
                                         for s in best["metastable"]),
