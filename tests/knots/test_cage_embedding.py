@@ -65,7 +65,9 @@ def test_cage_too_few_beads_raises():
 def test_starts_selection():
     assert available_starts(get_knot("3_1")) == ["braid"]
     assert available_starts(get_knot("5_2")) == ["braid", "cage"]
-    assert resolve_starts(get_knot("4_1"), "all", 4) == ["braid", "cage", "braid", "cage"]
+    # 4_1 is of the 80 family too: its 'all' is braid, cage, eighty (default_starts)
+    assert resolve_starts(get_knot("4_1"), "all", 4) == ["braid", "cage", "eighty", "braid"]
+    assert resolve_starts(get_knot("8_3"), "all", 4) == ["braid", "cage", "braid", "cage"]
     assert resolve_starts(get_knot("3_1"), "all", 2) == ["braid", "braid"]
     assert resolve_starts(get_knot("4_1"), "cage", 2) == ["cage", "cage"]
     assert resolve_starts(get_knot("4_1"), ["cage", "braid"], 2) == ["cage", "braid"]
@@ -83,7 +85,8 @@ def test_anneal_records_the_start_of_every_replica():
     res = anneal("4_1", moves=200_000, replicas=2, seed=3, workers=1, rounds=1)
     assert sorted(r.start for r in res.replicas) == ["braid", "cage"]
     assert all(r.knot_verified for r in res.replicas)
-    assert sorted(res.settings["start"]) == ["braid", "cage"]
+    # the starts the replicas take in turn over the rounds (the 80 from the third replica on)
+    assert res.settings["start"] == ["braid", "cage", "eighty"]
     assert all(abs(r.energy - r.energy_recomputed) < 1e-9 for r in res.replicas)
 
 
