@@ -110,20 +110,19 @@ def _drain(q, on_progress: Callable[[dict], None]) -> None:
         on_progress(item)
 
 
-def _warm() -> int:
+def _warm() -> None:
     """Import, in a fresh worker, what every job needs (the engine and its kernels, the knot
     check's topoly: about 2 s), so that it happens while the parent builds its problem."""
     import stiffknots.engine.driver  # noqa: F401
     from stiffknots.knots.identify import _topoly
 
     _topoly()
-    return os.getpid()
 
 
 class WorkerPool:
     """Worker processes kept for a whole solve: its rounds run on the same processes.
 
-    A fresh process costs about 2 s before its first move (the interpreter, numpy, numba's
+    A fresh process costs ≈ 3.5 CPU s before its first move (the interpreter, numpy, numba's
     cached kernels, topoly for the knot check) — per round, when every round spawned its own
     (a knot that took 8 rounds spent ≈ 20 s of ≈ 100 s there). :meth:`start` spawns the
     workers and has them import the solvers, so a caller may start the pool before it builds
@@ -141,7 +140,6 @@ class WorkerPool:
         self.workers = max(1, int(workers))
         self._ex: ProcessPoolExecutor | None = None
         self._q = None
-        self._warming: list = []
         self.dead = False
 
     def start(self) -> WorkerPool:
@@ -153,7 +151,8 @@ class WorkerPool:
                                            initializer=_worker_init,
                                            initargs=(os.getpid(), self._q))
             with _ctrl_c_held():  # the workers are spawned here, by submit
-                self._warming = [self._ex.submit(_warm) for _ in range(self.workers)]
+                for _ in range(self.workers):
+                    self._ex.submit(_warm)
         return self
 
     def __enter__(self) -> WorkerPool:
@@ -191,10 +190,9 @@ class WorkerPool:
             _drain(self._q, sink)
             ok = True
         except KeyboardInterrupt:
-            self.close()
             return results, True
         finally:
-            if not ok:
+            if not ok:  # Ctrl-C, a job's exception, a dead worker: the pool stops
                 self.close()
         return results, False
 
