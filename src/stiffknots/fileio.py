@@ -40,10 +40,10 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     tmp = Path(tmp)
-    with contextlib.suppress(OSError):
-        os.fchmod(fd, _FILE_MODE)
-    os.close(fd)
     try:
+        with contextlib.suppress(OSError):
+            os.fchmod(fd, _FILE_MODE)
+        os.close(fd)
         yield tmp
         os.replace(tmp, path)
     except BaseException:

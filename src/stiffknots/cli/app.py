@@ -308,7 +308,7 @@ class ResultsFolder:
         self.before: set[str] = set()
 
     def _names(self) -> set[str]:
-        return {n for n in os.listdir(self.path) if not n.startswith(".")}
+        return set(os.listdir(self.path))
 
     def __enter__(self):
         if self.path is not None:
@@ -320,12 +320,13 @@ class ResultsFolder:
             return False
         new = sorted(self._names() - self.before)
         if kind is None:
+            new = [n for n in new if not n.startswith(".")]  # the lock probe, a temporary file
             files = [q for n in new for q in ([self.path / n] if not (self.path / n).is_dir()
                                               else sorted(self.path.joinpath(n).rglob("*")))
                      if not q.is_dir()]
             write_manifest(self.path, files, self.command)
             return False
-        for n in new:
+        for n in new:  # hidden ones too: a Ctrl-C inside an atomic write can leave its .tmp
             _remove(self.path / n)
         if issubclass(kind, KeyboardInterrupt):
             raise Interrupted(f"interrupted while {self.doing}; the files of this run were "

@@ -20,7 +20,6 @@ import contextlib
 import ctypes
 import multiprocessing as mp
 import os
-import queue
 import signal
 import threading
 import time
@@ -102,10 +101,21 @@ def _worker_init(parent: int, progress_queue) -> None:
 
 
 def _drain(q, on_progress: Callable[[dict], None]) -> None:
+    """Hand every progress record already in the pipe ``q`` (a ``SimpleQueue``) to
+    ``on_progress``.
+
+    A worker's :func:`report` writes its record into the pipe before it returns (a
+    ``SimpleQueue`` has no feeder thread), so every record of a job is here by the time the
+    job's result has reached this process: a drain after the result sees them all. (With a
+    ``multiprocessing.Queue`` a background thread wrote them, sometimes after the result: the
+    last records of a run went missing, or reached the next run's callback.)
+    """
     while True:
         try:
-            item = q.get_nowait()
-        except (queue.Empty, OSError, EOFError, ValueError):
+            if q.empty():
+                return
+            item = q.get()
+        except (OSError, EOFError, ValueError):
             return
         on_progress(item)
 
@@ -146,7 +156,7 @@ class WorkerPool:
         """Spawn the workers now (they import the solvers in the background)."""
         if self._ex is None and not self.dead:
             ctx = mp.get_context("spawn")
-            self._q = ctx.Queue()
+            self._q = ctx.SimpleQueue()  # report() writes synchronously: see _drain
             self._ex = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
                                            initializer=_worker_init,
                                            initargs=(os.getpid(), self._q))
@@ -201,10 +211,8 @@ class WorkerPool:
         if self._ex is not None:
             _terminate(self._ex)
             self._ex = None
-        if self._q is not None:
-            _drain(self._q, lambda info: None)
+        if self._q is not None:  # not drained: a worker killed mid-write leaves half a record
             self._q.close()
-            self._q.join_thread()
             self._q = None
         self.dead = True
 
