@@ -96,8 +96,9 @@ def default_starts(knot, n_beads: int = 150) -> list[str]:
     (r mod k)-th): the braid closure, the 4-fold cage where the knot is a two-box rational
     knot, and the 80 where the knot is of the 80 family (n ≠ i: an n = i knot's ground state
     is its circular braid) — the embeddings of the shapes §VII conjectures for it. Measured:
-    the knots of the 80 family reached lower states from the 80 (8_8, 226.9 against 231.7
-    from braid and cage alone; bench/RESULTS.md).
+    the knots of the 80 family reached lower states from the 80 (8_8: 226.9 against 231.7
+    from braid and cage alone in the atlas sweep, 216.98 against 233.42 in ``anneal``'s
+    defaults survey; bench/RESULTS.md).
 
     Raises
     ------
