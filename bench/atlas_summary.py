@@ -1,0 +1,104 @@
+"""What a sweep's database holds: replicas, CPU, verdicts by crossing number, and how far apart
+the two best replicas of each ground shape are.
+
+    python bench/atlas_summary.py [results/stiffknots.db] [--json FILE]
+
+Reads the store only (any sweep: ``stiffknots atlas``). Per model (bead rule, tube): the
+(knot, model) pairs, the replicas and their CPU/wall seconds, the converged verdicts of
+:mod:`stiffknots.sweeps.convergence` (≥ 2 replicas of the ground shape within 0.1 % of its
+lowest ε) by crossing number, the pairs not converged, and the distribution of the relative
+gap between the lowest replica of the ground shape and the next one of that shape — the gap
+the verdict's 0.1 % must bridge (README, "Bead rule against tube"). Every number is at the
+stored width (N and d or w/L, printed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import sys
+
+from stiffknots.knots.catalogue import get_knot
+from stiffknots.store.keys import knot_sort_key
+from stiffknots.store.sqlite import Store
+from stiffknots.sweeps.convergence import RULE, is_converged
+
+GAP_EDGES = (1e-3, 3e-3, 1e-2, 3e-2)
+GAP_LABELS = ("≤ 0.1 %", "0.1–0.3 %", "0.3–1 %", "1–3 %", "> 3 %")
+
+
+def summarise(path: str) -> dict:
+    store = Store(path, create=False)
+    grounds = store.ground_states()
+    rows = store._query(  # noqa: SLF001 (numbers only, no coordinates)
+        "SELECT knot, exclusion, w_over_L, beads, epsilon, shape, multiplicity, cpu_seconds, "
+        "wall_seconds FROM replicas")
+    by_pair: dict[tuple[str, str], list[tuple]] = collections.defaultdict(list)
+    widths: dict[str, set] = collections.defaultdict(set)
+    for knot, model, wl, beads, eps, shape, mult, cpu, wall in rows:
+        by_pair[(knot, model)].append((eps, f"{shape}{mult or ''}", cpu or 0.0, wall))
+        widths[model].add((beads, round(wl, 6)))
+    out: dict = {"db": str(path), "rule": RULE, "models": {}}
+    for model in sorted({m for _, m in by_pair}):
+        pairs = sorted((k for k, m in by_pair if m == model), key=knot_sort_key)
+        verdict = {g["knot"]: is_converged(g) for g in grounds if g["exclusion"] == model}
+        by_nc: dict[int, list[int]] = collections.defaultdict(lambda: [0, 0])
+        gaps = [0] * len(GAP_LABELS)
+        lone = 0
+        for k in pairs:
+            nc = get_knot(k).crossing_number
+            by_nc[nc][0] += 1
+            by_nc[nc][1] += bool(verdict.get(k))
+            reps = sorted(by_pair[(k, model)])
+            same = [e for e, s, _, _ in reps if s == reps[0][1]]
+            if len(same) < 2:
+                lone += 1
+                continue
+            gap = (same[1] - same[0]) / same[0]
+            gaps[sum(gap > edge for edge in GAP_EDGES)] += 1
+        reps = [r for k in pairs for r in by_pair[(k, model)]]
+        out["models"][model] = {
+            "widths": [{"N": b, "w/L": w} for b, w in sorted(widths[model])],
+            "pairs": len(pairs), "replicas": len(reps),
+            "cpu_seconds": round(sum(r[2] for r in reps), 1),
+            "wall_seconds_of_replicas": round(sum(r[3] for r in reps), 1),
+            "converged": sum(bool(verdict.get(k)) for k in pairs),
+            "by_crossings": {nc: {"knots": v[0], "converged": v[1]}
+                             for nc, v in sorted(by_nc.items())},
+            "not_converged": [k for k in pairs if not verdict.get(k)],
+            "gap_to_second_of_ground_shape": dict(zip(GAP_LABELS, gaps, strict=True)),
+            "ground_shape_reached_once": lone,
+        }
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("db", nargs="?", default="results/stiffknots.db")
+    ap.add_argument("--json", help="also write the summary to this file")
+    a = ap.parse_args(argv)
+    s = summarise(a.db)
+    print(f"{s['db']}: {s['rule']}")
+    for model, m in s["models"].items():
+        w = ", ".join(f"N = {x['N']}, w/L = {x['w/L']}" for x in m["widths"])
+        print(f"\n{model} ({w}): {m['pairs']} knots, {m['replicas']} replicas "
+              f"({m['replicas'] / max(1, m['pairs']):.1f} per knot), {m['cpu_seconds']:.0f} CPU s "
+              f"({m['cpu_seconds'] / max(1, m['replicas']):.1f} per replica)")
+        print(f"  converged {m['converged']} of {m['pairs']} "
+              f"({m['converged'] / max(1, m['pairs']):.0%}); by crossings: "
+              + ", ".join(f"{nc}: {v['converged']}/{v['knots']}"
+                          for nc, v in m["by_crossings"].items()))
+        print("  gap from the lowest replica of the ground shape to the next one: "
+              + ", ".join(f"{k} {v}" for k, v in m["gap_to_second_of_ground_shape"].items())
+              + f"; reached once {m['ground_shape_reached_once']}")
+        print(f"  not converged ({len(m['not_converged'])}): {', '.join(m['not_converged'])}")
+    if a.json:
+        with open(a.json, "w", encoding="utf-8") as fh:
+            json.dump(s, fh, indent=1, ensure_ascii=False)
+            fh.write("\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
