@@ -352,3 +352,18 @@ def test_knots_without_results_still_get_a_row_and_a_page(tmp_path):
     page = (tmp_path / "knots" / "K11n34.html").read_text(encoding="utf-8")
     assert "No computed states" in page and "states-data" not in page
     assert not (tmp_path / "thumbs").exists()
+
+
+def test_a_segment_distance_below_a_thousandth_is_not_shown_as_zero(tmp_path, knots):
+    """Under the bead rule two segments may close to the no-passage guard's gap (10⁻⁴): the
+    index and the knot page show 1.0e-04, not 0.000."""
+    import copy
+
+    ks = copy.deepcopy(knots)
+    ks[0]["models"]["bead"]["ground"]["min_segment_distance"] = 1.0e-4
+    idx = write_atlas(tmp_path, ks, families=synthetic_families(), thumbnails=False)
+    index = idx.read_text(encoding="utf-8")
+    page = (tmp_path / "knots" / f"{ks[0]['name']}.html").read_text(encoding="utf-8")
+    for text in (index, page):
+        assert ">1.0e-04<" in text
+    assert ">0.000<" not in index

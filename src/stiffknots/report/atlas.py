@@ -391,6 +391,14 @@ def _num(x: float | None, digits: int = 2) -> str:
     return "—" if x is None else f"{x:.{digits}f}"
 
 
+def _dist(x: float | None) -> str:
+    """A segment distance: 3 decimals, or two significant figures below 10⁻³ (the bead rule
+    lets two segments close to the guard's gap of 10⁻⁴, which "0.000" would hide)."""
+    if x is None:
+        return "—"
+    return f"{x:.3f}" if x >= 1e-3 else f"{x:.1e}"
+
+
 def _natural(name: str) -> str:
     """A sort key in which the numbers of a name compare as numbers (3_1 < 10_1)."""
     return re.sub(r"\d+", lambda m: m.group().zfill(8), name.lower())
@@ -974,7 +982,9 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
             ("converged", "text", "", "whether the lowest ε was reached repeatedly"),
             ("metastable", "num", "", "the other states found: shape ×count (ε)"),
             ("d<sub>min</sub>", "num", "num",
-             "minimum distance between non-adjacent segments of the ground state"),
+             "minimum distance between non-adjacent segments of the ground state (the bead "
+             "rule keeps beads, not segments, apart: two segments may close to the 1e-4 gap "
+             "its no-passage guard keeps)"),
             ("families", "text", "", "shape families the knot belongs to")]
     head = []
     for label, typ, cls, tip in cols:
@@ -1052,7 +1062,7 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
                                      lambda m: str(len(m.metastable)) if m.ground or
                                      m.metastable else None))
         cells.append(_per_model_cell(
-            k, models, lambda m: _num(gs(m).min_segment_distance, 3) if gs(m) else "—",
+            k, models, lambda m: _dist(gs(m).min_segment_distance) if gs(m) else "—",
             lambda m: (f"{gs(m).min_segment_distance:.6f}"
                        if gs(m) and gs(m).min_segment_distance is not None else None), "num"))
         fam = ", ".join(k.families)
@@ -1197,7 +1207,7 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
                 f'<td class="num">{_num(st.eps_mean)}</td>'
                 f'<td class="num">{_count_text(st, m.replicas)}</td>'
                 f"<td>{_yes_no(st.converged)}</td>"
-                f'<td class="num">{_num(st.min_segment_distance, 3)}</td>'
+                f'<td class="num">{_dist(st.min_segment_distance)}</td>'
                 f'<td class="width">{_e(st.width) if st.width else "—"}</td>'
                 f"<td>{view}</td></tr>\n")
         parts.append("</tbody></table>\n")
