@@ -20,6 +20,7 @@ import json
 import sys
 
 from stiffknots.knots.catalogue import get_knot
+from stiffknots.knots.families import families_of, predicted_shape
 from stiffknots.store.keys import knot_sort_key
 from stiffknots.store.sqlite import Store
 from stiffknots.sweeps.convergence import RULE, is_converged
@@ -58,6 +59,23 @@ def summarise(path: str) -> dict:
             gap = (same[1] - same[0]) / same[0]
             gaps[sum(gap > edge for edge in GAP_EDGES)] += 1
         reps = [r for k in pairs for r in by_pair[(k, model)]]
+        shape_of = {g["knot"]: (g["shape"], g["multiplicity"]) for g in grounds
+                    if g["exclusion"] == model}
+        fam_rows: dict[str, dict] = {}
+        for k in pairs:
+            knot = get_knot(k)
+            pred = predicted_shape(knot)
+            got = shape_of.get(k)
+            hit = pred is not None and got is not None and (
+                got[0] == pred[0] and (pred[1] is None or got[1] == pred[1]))
+            for fam in families_of(knot) or ["none"]:
+                row = fam_rows.setdefault(fam, {"knots": 0, "as_predicted": 0, "converged": 0,
+                                                "shapes": collections.Counter()})
+                row["knots"] += 1
+                row["as_predicted"] += hit
+                row["converged"] += bool(verdict.get(k))
+                if got is not None:
+                    row["shapes"][got[0] if got[0] != "CB" else f"CB({got[1]})"] += 1
         out["models"][model] = {
             "widths": [{"N": b, "w/L": w} for b, w in sorted(widths[model])],
             "pairs": len(pairs), "replicas": len(reps),
@@ -69,6 +87,8 @@ def summarise(path: str) -> dict:
             "not_converged": [k for k in pairs if not verdict.get(k)],
             "gap_to_second_of_ground_shape": dict(zip(GAP_LABELS, gaps, strict=True)),
             "ground_shape_reached_once": lone,
+            "families": {f: {**v, "shapes": dict(v["shapes"].most_common())}
+                         for f, v in fam_rows.items()},
         }
     return out
 
@@ -93,6 +113,14 @@ def main(argv: list[str] | None = None) -> int:
               + ", ".join(f"{k} {v}" for k, v in m["gap_to_second_of_ground_shape"].items())
               + f"; reached once {m['ground_shape_reached_once']}")
         print(f"  not converged ({len(m['not_converged'])}): {', '.join(m['not_converged'])}")
+        print("  | family | knots | ground = predicted shape | converged | ground shapes |")
+        print("  |---|---|---|---|---|")
+        for fam in ("n=i", "4C", "80", "none"):
+            v = m["families"].get(fam)
+            if v:
+                shapes = ", ".join(f"{k} {n}" for k, n in v["shapes"].items())
+                pred = "—" if fam == "none" else str(v["as_predicted"])
+                print(f"  | {fam} | {v['knots']} | {pred} | {v['converged']} | {shapes} |")
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
             json.dump(s, fh, indent=1, ensure_ascii=False)
