@@ -118,6 +118,24 @@ def test_atlas_json_shape(tmp_path):
     d2 = json.loads(stdout2)
     assert (d2["sweep"]["skipped"], d2["sweep"]["ran"]) == (2, 0)
     assert d2["knots"][0]["epsilon"] == k["epsilon"]
+    # --stored: a knot not yet swept gets its row and page, nothing runs, the rest is counted
+    rc, stdout3, err = cli("atlas", "--knots", "3_1,4_1", "--models", "bead", "--budget",
+                           "tiny", "--out", str(out), "--db", str(db), "--stored", "--json")
+    assert rc == 0, err
+    d3 = json.loads(stdout3)
+    sw3 = d3["sweep"]
+    assert (sw3["jobs"], sw3["skipped"], sw3["ran"], sw3["left"]) == (4, 2, 0, 2)
+    assert [e["name"] for e in d3["knots"]] == ["3_1", "4_1"]
+    assert d3["knots"][1]["models"]["bead"]["ground"] is None
+    assert (out / "knots" / "4_1.html").exists()
+    assert d3["converged"]["bead"] == float(k["converged"])  # over the knots with results
+    with Store(db, create=False) as st:
+        assert st.count() == 2
+    rc, text, err = cli("atlas", "--knots", "3_1,4_1", "--models", "bead", "--budget", "tiny",
+                        "--out", str(out), "--db", str(db), "--stored")
+    assert rc == 0, err
+    flat = " ".join(text.split())
+    assert "2 not run" in flat and f"bead {int(k['converged'])} of 1" in flat, flat
 
 
 # -- the results database ------------------------------------------------------------------

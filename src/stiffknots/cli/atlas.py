@@ -169,6 +169,11 @@ def atlas(
              "full, none added for tiny and small).",
         parser=count)] = None,
     seed: SeedOpt = 0,
+    stored: Annotated[bool, typer.Option(
+        "--stored", help="Run nothing: write the pages from the replicas already in --db "
+                         "(a sweep stopped part-way; its knots without results get a row "
+                         "that says so). The same command without --stored runs the rest.")
+    ] = False,
     json_: JsonOpt = False,
 ) -> None:
     """The atlas: ground and metastable states of every prime knot through K crossings
@@ -204,13 +209,13 @@ def atlas(
     with SweepProgress(disable=json_) as bar:
         d = run_atlas(names, mods, bud, db=db, out=out_dir, seed=seed, scheduler=scheduler,
                       workers=workers, max_replicas=max_replicas, listener=bar,
-                      command=command)
+                      command=command, run=not stored)
     sw = d["sweep"]
-    stored = sw["skipped"] + sw["ran"]
+    n_stored = sw["skipped"] + sw["ran"]
     if sw["interrupted"]:
         if json_:
             dump(d)
-        raise Interrupted(f"interrupted: {stored} of {sw['jobs']} jobs are stored in {db}; "
+        raise Interrupted(f"interrupted: {n_stored} of {sw['jobs']} jobs are stored in {db}; "
                           "run the same command to resume")
     if json_:
         dump(d)
@@ -253,10 +258,19 @@ def _print(d: dict, mods) -> None:
                   f"{fam['width']}): " + ", ".join(f"{k} {v}" for k, v in g["counts"].items())
                   + f"; as the family predicts {g['as_predicted']}, converged "
                   f"{g['converged']}", highlight=False, markup=False)
-    conv = ", ".join(f"{k} {100 * v:.0f} %" for k, v in d["converged"].items() if v is not None)
+    counts = []
+    for k, v in d["converged"].items():
+        done = [e for e in d["knots"] if e["models"][k]["ground"]]
+        if v is not None:
+            n = sum(1 for e in done if e["models"][k]["converged"])
+            counts.append(f"{k} {n} of {len(done)} ({100 * v:.0f} %)")
+    conv = ", ".join(counts)
     out.print(f"converged ({fam['rule']}): {conv}", highlight=False, markup=False)
     added = f", {sw['added']} added until converged" if sw["added"] else ""
-    out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}, "
-              f"{sw['wall_seconds']:.0f} s wall, {sw['cpu_seconds']:.0f} CPU s)",
+    left = f", {sw['left']} not run" if sw["left"] else ""
+    out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}"
+              f"{left}, {sw['wall_seconds']:.0f} s wall, {sw['cpu_seconds']:.0f} CPU s)",
               highlight=False)
+    if sw["left"] and not sw["failed"]:
+        out.print("the same command without --stored runs the jobs not run", highlight=False)
     out.print(f"atlas: {d['html']}\ndatabase: {d['db']}", highlight=False, markup=False)

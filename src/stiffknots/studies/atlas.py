@@ -302,7 +302,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
               db: str | Path = DEFAULT_DB, out: str | Path = DEFAULT_OUT, seed: int = 0,
               scheduler: str | None = None, workers: int | None = None,
               max_replicas: int | None = None, listener: SweepListener | None = None,
-              thumbnails: bool = True, command: str | None = None) -> dict:
+              thumbnails: bool = True, command: str | None = None,
+              run: bool = True) -> dict:
     """Sweep ``knots`` × ``models`` on ``budget``, then write the atlas from the store.
 
     Parameters
@@ -325,14 +326,17 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
         Draw the ground-state thumbnails.
     command : str, optional
         The command line, shown at the foot of the index page.
+    run : bool
+        False: run nothing, write the atlas of what is stored (``sweep["todo"]``: the jobs
+        not yet run; a knot without results gets a row and a page that say so).
 
     Returns
     -------
     dict
         ``db``, ``html`` (None when interrupted: no pages are written then), ``sweep``
         (:meth:`SweepResult.to_dict`), ``knots`` (:func:`json_entry` per knot),
-        ``families`` (:func:`family_study`), ``converged`` (model → fraction of the knots
-        with a converged ground state), ``files``.
+        ``families`` (:func:`family_study`), ``converged`` (model → the fraction of the
+        knots with results in the model whose ground state converged), ``files``.
     """
     from stiffknots.report.atlas import write_atlas
 
@@ -341,7 +345,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
     with Store(db) as store:
         sweep: SweepResult = run_sweep(knots, models, budget, store, seed=seed,
                                        scheduler=scheduler, workers=workers,
-                                       max_replicas=max_replicas, listener=listener)
+                                       max_replicas=max_replicas, listener=listener,
+                                       run=run)
         result: dict[str, Any] = {"db": str(db), "html": None, "sweep": sweep.to_dict()}
         if sweep.interrupted:
             return result
@@ -370,8 +375,11 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
     files["families"] = str(write_json(out / "families.json", {
         "version": __version__, "seed": seed, "budget": budget.as_dict(),
         "settings": {m.name: sweep_settings(m, budget) for m in models}, **study}))
-    converged = {m.name: (sum(1 for e in entries if e["models"][m.name]["converged"])
-                          / len(entries) if entries else None) for m in models}
+    converged = {}  # over the knots with results in the model (a part-way atlas has others)
+    for m in models:
+        done = [e for e in entries if e["models"][m.name]["ground"]]
+        converged[m.name] = (sum(1 for e in done if e["models"][m.name]["converged"])
+                             / len(done) if done else None)
     result.update({"html": str(html), "knots": entries, "families": study,
                    "converged": converged, "files": files,
                    "atlas_seconds": time.perf_counter() - t0})

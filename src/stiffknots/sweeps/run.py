@@ -121,6 +121,11 @@ class SweepResult:
         return self.jobs - self.skipped
 
     @property
+    def left(self) -> int:
+        """Jobs planned and not stored when the sweep ended (stopped, failed, or not run)."""
+        return self.todo - self.ran
+
+    @property
     def complete(self) -> bool:
         """Every planned job is stored."""
         return not self.interrupted and not self.failed and self.ran == self.todo
@@ -130,8 +135,8 @@ class SweepResult:
                 "widths": {m.name: m.width() for m in self.models},
                 "budget": self.budget.as_dict(), "seed": self.seed,
                 "settings_hash": self.settings_hash, "jobs": self.jobs,
-                "skipped": self.skipped, "ran": self.ran, "written": self.written,
-                "failed": self.failed, "interrupted": self.interrupted,
+                "skipped": self.skipped, "ran": self.ran, "left": self.left,
+                "written": self.written, "failed": self.failed, "interrupted": self.interrupted,
                 "wall_seconds": self.wall_seconds, "cpu_seconds": self.cpu_seconds,
                 "workers": self.workers, "scheduler": self.scheduler,
                 "max_replicas": self.max_replicas, "added": self.added,
@@ -173,7 +178,7 @@ def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str
 def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, store: Store, *,
               seed: int = 0, scheduler: str | None = None, workers: int | None = None,
               max_replicas: int | None = None, step: int = 2,
-              listener: SweepListener | None = None) -> SweepResult:
+              listener: SweepListener | None = None, run: bool = True) -> SweepResult:
     """Run every job of knots × models × replicas that ``store`` lacks; store each result.
 
     Parameters
@@ -203,6 +208,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         Replicas added at a time.
     listener : SweepListener, optional
         Told of the plan, the progress and each finished job.
+    run : bool
+        False: plan and count only — what is stored (``skipped``) and what is still to run
+        (``todo``, with the replicas a finished, unconverged (knot, model) would get) — and
+        start no cluster (the pages of a sweep stopped part-way).
 
     Returns
     -------
@@ -263,7 +272,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         if g["open"] == 0:
             feed.extendleft(reversed(extend(g)))
     listener.started(res)
-    if not feed:
+    if not feed or not run:
         res.wall_seconds = time.perf_counter() - t0
         return res
 
