@@ -327,7 +327,7 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
     command : str, optional
         The command line, shown at the foot of the index page.
     run : bool
-        False: run nothing, write the atlas of what is stored (``sweep["todo"]``: the jobs
+        False: run nothing, write the atlas of what is stored (``sweep["left"]``: the jobs
         not yet run; a knot without results gets a row and a page that say so).
 
     Returns

@@ -210,7 +210,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         Told of the plan, the progress and each finished job.
     run : bool
         False: plan and count only — what is stored (``skipped``) and what is still to run
-        (``todo``, with the replicas a finished, unconverged (knot, model) would get) — and
+        (``left``: the planned replicas not stored, and the next ``step`` replicas of every
+        (knot, model) whose replicas have ended unconverged; more may follow them) — and
         start no cluster (the pages of a sweep stopped part-way).
 
     Returns
