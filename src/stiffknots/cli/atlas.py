@@ -258,13 +258,8 @@ def _print(d: dict, mods) -> None:
                   f"{fam['width']}): " + ", ".join(f"{k} {v}" for k, v in g["counts"].items())
                   + f"; as the family predicts {g['as_predicted']}, converged "
                   f"{g['converged']}", highlight=False, markup=False)
-    counts = []
-    for k, v in d["converged"].items():
-        done = [e for e in d["knots"] if e["models"][k]["ground"]]
-        if v is not None:
-            n = sum(1 for e in done if e["models"][k]["converged"])
-            counts.append(f"{k} {n} of {len(done)} ({100 * v:.0f} %)")
-    conv = ", ".join(counts)
+    conv = ", ".join(f"{k} {c['converged']} of {c['knots']} ({100 * d['converged'][k]:.0f} %)"
+                     for k, c in d["converged_counts"].items() if c["knots"])
     out.print(f"converged ({fam['rule']}): {conv}", highlight=False, markup=False)
     added = f", {sw['added']} added until converged" if sw["added"] else ""
     left = f", {sw['left']} not run" if sw["left"] else ""

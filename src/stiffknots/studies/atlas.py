@@ -336,7 +336,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
         ``db``, ``html`` (None when interrupted: no pages are written then), ``sweep``
         (:meth:`SweepResult.to_dict`), ``knots`` (:func:`json_entry` per knot),
         ``families`` (:func:`family_study`), ``converged`` (model → the fraction of the
-        knots with results in the model whose ground state converged), ``files``.
+        knots with results in the model whose ground state converged), ``converged_counts``
+        (model → ``{"converged", "knots"}``, the same as counts), ``files``.
     """
     from stiffknots.report.atlas import write_atlas
 
@@ -375,12 +376,14 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
     files["families"] = str(write_json(out / "families.json", {
         "version": __version__, "seed": seed, "budget": budget.as_dict(),
         "settings": {m.name: sweep_settings(m, budget) for m in models}, **study}))
-    converged = {}  # over the knots with results in the model (a part-way atlas has others)
+    counts = {}  # over the knots with results in the model (a part-way atlas has others)
     for m in models:
         done = [e for e in entries if e["models"][m.name]["ground"]]
-        converged[m.name] = (sum(1 for e in done if e["models"][m.name]["converged"])
-                             / len(done) if done else None)
+        counts[m.name] = {"converged": sum(1 for e in done if e["models"][m.name]["converged"]),
+                          "knots": len(done)}
+    converged = {k: (c["converged"] / c["knots"] if c["knots"] else None)
+                 for k, c in counts.items()}
     result.update({"html": str(html), "knots": entries, "families": study,
-                   "converged": converged, "files": files,
+                   "converged": converged, "converged_counts": counts, "files": files,
                    "atlas_seconds": time.perf_counter() - t0})
     return result
