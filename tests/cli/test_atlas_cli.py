@@ -335,7 +335,8 @@ def test_progress_lines_where_stderr_is_not_a_terminal():
         bar.finished(SimpleNamespace(id="4_1/bead/r0"), None, "boom")
     lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
     assert lines[0] == "1 of 4 jobs already stored: skipped"
-    assert " 1/3 jobs, 0:00:00 elapsed, ETA 0:00:00 — 3_1/bead/r1: ε = 79.02 CB(i=2)" in lines[1]
+    # nothing settled yet: the time left counts the plan alone, and says it is a lower bound
+    assert " 1/3 jobs, 0:00:00 elapsed, ETA ≥ 0:00:00 — 3_1/bead/r1: ε = 79.02 CB(i=2)" in lines[1]
     assert " 2/5 jobs, " in lines[2] and lines[2].endswith("4_1/bead/r0: failed")
     assert len(lines) == 3
     # with --json nothing at all; on a terminal the bar, not the lines
@@ -350,4 +351,47 @@ def test_progress_lines_where_stderr_is_not_a_terminal():
     from stiffknots.sweeps import SweepListener
 
     hooks = [k for k, v in vars(SweepListener).items() if callable(v) and not k.startswith("_")]
-    assert len(hooks) == 5 and all(callable(getattr(SweepProgress, k)) for k in hooks)
+    assert len(hooks) == 6 and all(callable(getattr(SweepProgress, k)) for k in hooks)
+
+
+def test_time_left_counts_the_replicas_still_to_be_added():
+    """The time left is the mean pace times the jobs expected (planned + the replicas that
+    unconverged knots will get, from the settled ones' mean), not the plan alone: 1 job of
+    3 planned done in 100 s with 10 expected leaves 900 s, not 200 s."""
+    import io
+    import time
+    from types import SimpleNamespace
+
+    from rich.console import Console
+
+    from stiffknots.cli.atlas import SweepProgress
+
+    buf = io.StringIO()
+    bar = SweepProgress(console=Console(file=buf, force_terminal=False, width=200))
+    with bar:
+        bar.started(SimpleNamespace(skipped=0, jobs=3, todo=3))
+        bar.t0 = time.monotonic() - 100.0
+        bar.expected(10.0)
+        bar.finished(SimpleNamespace(id="3_1/bead/r0"),
+                     {"shape": "CB", "multiplicity": 2, "epsilon": 79.0182}, None)
+        bar.expected(3.0)  # everything settled as planned: the plan is the estimate
+        bar.finished(SimpleNamespace(id="3_1/bead/r1"),
+                     {"shape": "CB", "multiplicity": 2, "epsilon": 79.0182}, None)
+    lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
+    assert "1/3 jobs, 0:01:40 elapsed, ETA 0:15:00 (≈ 10 jobs) — 3_1/bead/r0" in lines[0]
+    assert "2/3 jobs, 0:01:40 elapsed, ETA 0:00:50 — 3_1/bead/r1" in lines[1]
+
+
+def test_expected_todo_adds_the_settled_mean_to_every_open_knot():
+    """expected_todo: the plan until a (knot, model) settles; then each open one is expected
+    to need the settled ones' mean replicas beyond the budget's, less those it has."""
+    from stiffknots.sweeps.run import expected_todo
+
+    open_ = {"replicas": 2, "settled": False}
+    assert expected_todo({("a", "bead"): dict(open_), ("b", "bead"): dict(open_)}, 4, 2) == 4
+    groups = {("a", "bead"): {"replicas": 6, "settled": True},   # 4 added
+              ("b", "bead"): {"replicas": 2, "settled": True},   # converged at once
+              ("c", "bead"): {"replicas": 2, "settled": False},  # expects 2 more
+              ("d", "bead"): {"replicas": 4, "settled": False},  # has them already
+              ("e", "bead"): {"replicas": 6, "settled": False}}  # more than the mean: 0
+    assert expected_todo(groups, 20, 2) == 22.0

@@ -90,10 +90,31 @@ def test_later_rounds_continue_the_lowest_search_and_start_new_ones():
     leg, new = by_id[4], by_id[5]
     assert leg.lineage == early[0].replica and leg.leg == 1
     assert new.lineage == 5 and new.leg == 0  # a new search fills the round
+    # … from the embedding of the lowest search (its start: 'all' lets the rounds favour it)
+    assert new.start == early[0].start and leg.start == early[0].start
     assert all(r.knot == "7_4" and r.knot_verified for r in res.replicas)
     # a leg never ends above the chain it started from (the start is its first candidate)
     assert leg.epsilon <= early[0].epsilon + 1e-9
     assert all(by_id[i].lineage == i and by_id[i].leg == 0 for i in range(4))
+
+
+def test_new_searches_after_the_fresh_rounds_take_the_favoured_start():
+    """Problem.favour: replicas of the fresh rounds keep the round-robin starts, later ones
+    take the favoured start; only a start of the problem can be favoured; a problem given
+    its starts explicitly does not let the rounds favour one."""
+    from stiffknots.problems.closed import ClosedAnneal
+
+    p = ClosedAnneal("5_2", moves=1_000, replicas=2)
+    assert p.adaptive_starts and p.starts == ["braid", "cage", "eighty"]
+    assert [p._start(r) for r in range(6)] == ["braid", "cage", "eighty"] * 2
+    p.favour("cage")
+    assert [p._start(r) for r in range(6)] == ["braid", "cage", "eighty", "braid", "cage",
+                                                "cage"]
+    assert [j.start for j in p.jobs(first=4)] == ["cage", "cage"]
+    with pytest.raises(ValueError, match="not one of"):
+        p.favour("circle")
+    assert not ClosedAnneal("5_2", moves=1_000, replicas=2,
+                            start=["braid", "cage"]).adaptive_starts
 
 
 def test_an_easy_knot_converges_in_one_round():
@@ -144,3 +165,29 @@ def test_a_knot_beyond_the_table_is_verified_by_its_start():
 def test_bad_rule_is_refused(kw, param):
     with pytest.raises(ValueError, match=param):
         anneal("3_1", moves=10_000, replicas=1, **kw)
+
+
+def test_the_start_polynomial_is_cached_by_the_chains_exact_bytes(tmp_path, monkeypatch):
+    """start_code computes a start's polynomial once: a second call with the same chain reads
+    it from the disk cache (no topoly in the parent); a chain one bit different, or another
+    knot name, is computed (and checked) again."""
+    import stiffknots.problems.base as B
+    from stiffknots.errors import EmbeddingError
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.starts import start_chain
+
+    monkeypatch.setenv("STIFFKNOTS_CACHE", str(tmp_path))
+    x = start_chain(get_knot("3_1"), "braid", 150)
+    calls = []
+    real = B._start_code
+    monkeypatch.setattr(B, "_start_code", lambda *a: calls.append(a[0]) or real(*a))
+    code = B.start_code("3_1", x, True, "braid")
+    assert B.start_code("3_1", x, True, "braid") == code and calls == ["3_1"]
+    y = x.copy()
+    y[7, 0] = np.nextafter(y[7, 0], np.inf)
+    assert B.start_code("3_1", y, True, "braid") == code and calls == ["3_1", "3_1"]
+    with pytest.raises(EmbeddingError, match="identifies as"):  # checked, never cached
+        B.start_code("4_1", x, True, "braid")
+    with pytest.raises(EmbeddingError, match="identifies as"):
+        B.start_code("4_1", x, True, "braid")
+    assert calls == ["3_1", "3_1", "4_1", "4_1"]

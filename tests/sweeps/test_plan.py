@@ -4,6 +4,7 @@ problem's jobs, the starts and the convergence rule."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -95,7 +96,7 @@ def test_plan_keys_known_in_advance():
     assert j.key == ReplicaKey("3_1", "bead", 150, D, 7, 0, settings_hash(j.settings))
     # the settings: every setting that changes the result (moves, exclusion and its width)
     s = sweep_settings(models[0], BUDGETS["small"])
-    assert s["problem"] == "anneal" and s["start"] == "braid,cage,eighty"
+    assert s["problem"] == "anneal" and s["start"] == "braid,cage,eighty;added:lowest"
     assert s["moves"] == 5_000_000 and s["params"]["exclusion"] == "bead"
     hashes = {m.name: settings_hash(sweep_settings(m, BUDGETS["small"])) for m in models}
     assert hashes["bead"] != hashes["tube"]
@@ -143,6 +144,37 @@ def test_build_jobs_are_the_problems_with_the_keys_settings():
     assert [built[r].start for r in (0, 1)] == ["braid", "cage"]
     with pytest.raises(RuntimeError, match="differ"):
         build_jobs("4_1", bead, b, 3, {**jobs[0].settings, "moves": 12345})
+    # an added replica's favoured start: every replica of the call starts there, the seeds
+    # stay the replicas' own
+    fav = build_jobs("4_1", bead, replace(b, replicas=4), 3, jobs[0].settings, "cage")
+    assert [fav[r].start for r in range(4)] == ["cage"] * 4
+    assert fav[1].seed == built[1].seed and np.array_equal(fav[1].coords, built[1].coords)
+    assert np.array_equal(fav[2].coords, built[1].coords)
+    with pytest.raises(RuntimeError, match="no start 'cage'"):  # 3_1 is no two-box knot
+        build_jobs("3_1", bead, b, 3, jobs[0].settings, "cage")
+
+
+def test_added_replicas_take_the_start_of_the_lowest_stored_before_them(tmp_path):
+    """favoured_start: replicas 0-2 keep their round-robin starts; from replica 3 on, the
+    start of the lowest replica stored among those planned before it (deterministic: a
+    replica stored later, even a lower one, does not change it)."""
+    from stiffknots.sweeps.plan import FAVOUR_FROM, favoured_start
+
+    (bead,) = parse_models("bead")
+    b = replace(BUDGETS["default"], replicas=6)
+    jobs = plan_sweep(["5_2"], [bead], b, seed=0)
+    with Store(tmp_path / "s.db") as st:
+        assert favoured_start(st, jobs[4], 4) is None  # nothing stored
+        for r, (start, eps) in enumerate([("braid", 150.0), ("cage", 142.7), ("eighty", 145.0),
+                                          ("braid", 142.0)]):
+            st.put({"knot": "5_2", "exclusion": "bead", "beads": 150, "thickness": D,
+                    "seed": 0, "replica": r, "settings": jobs[r].settings, "epsilon": eps,
+                    "start": start, "min_segment_distance": 0.7, "wall_seconds": 1.0},
+                   np.zeros((150, 3)))
+        assert FAVOUR_FROM == 3 and favoured_start(st, jobs[2], 2) is None
+        assert favoured_start(st, jobs[3], 2) == "cage"  # of replicas 0, 1
+        assert favoured_start(st, jobs[4], 4) == "braid"  # replica 3 (142.0) is lowest
+        assert favoured_start(st, jobs[5], 3) == "cage"  # replica 3 came later
 
 
 def test_starts_per_family():

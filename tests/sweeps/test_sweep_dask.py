@@ -157,11 +157,15 @@ def test_replicas_added_until_converged(tmp_path):
     with Store(tmp_path / "s.db") as st:
         rec = Recorder()
         rec.added = lambda n: rec.events.append(("added", n))
+        rec.expected = lambda n: rec.events.append(("expected", n))
         res = run_sweep(["3_1", "7_4"], models, budget, st, seed=0, workers=2,
                         max_replicas=4, listener=rec)
         assert not res.failed and res.added > 0, "nothing added: the test tested nothing"
         assert res.jobs == 4 + res.added and res.ran == res.jobs and res.max_replicas == 4
         assert sum(e[1] for e in rec.kinds("added")) == res.added
+        # the jobs expected: the plan before anything settled, every job run once all settled
+        expected = [e[1] for e in rec.kinds("expected")]
+        assert expected[0] == 4 and expected[-1] == res.todo == res.ran
         for knot in ("3_1", "7_4"):
             rows = st.replicas(knot=knot)
             first = [{"label": r["shape"], "multiplicity": r["multiplicity"],
@@ -171,6 +175,9 @@ def test_replicas_added_until_converged(tmp_path):
                                    "eps_all": [first[k]["epsilon"] for k in g.members]})
             assert len(rows) == (2 if agreed else 4), knot
             assert sorted(r["replica"] for r in rows) == list(range(len(rows)))
+            if len(rows) == 4:  # replica 3 started from the lowest of replicas 0 and 1
+                by = {r["replica"]: r for r in rows}
+                assert by[3]["start"] == min((by[0], by[1]), key=lambda r: r["epsilon"])["start"]
             assert len({r["settings_hash"] for r in rows}) == 1  # one ensemble
         n = st.count()
         res2 = run_sweep(["3_1", "7_4"], models, budget, st, seed=0, workers=2,

@@ -17,7 +17,6 @@ from rich.progress import (
     Progress,
     TextColumn,
     TimeElapsedColumn,
-    TimeRemainingColumn,
 )
 from rich.table import Table
 
@@ -41,19 +40,24 @@ def _hms(seconds: float) -> str:
 
 
 class SweepProgress:
-    """A live bar over the sweep's jobs on stderr: jobs done (a running job counts by its
-    moves done), time left, the last job finished. Where stderr is not a terminal (a log
-    file, a batch job) the bar is not drawn; a line per finished job says the same instead
-    (jobs done of planned, elapsed, time left at the mean pace so far, the job's result).
-    Nothing is shown with ``--json``. It has every method of
-    :class:`stiffknots.sweeps.SweepListener` without being a subclass, so that the command
-    line starts without importing Dask."""
+    """A live bar over the sweep's jobs on stderr: jobs done of planned (a running job counts
+    by its moves done), time left, the last job finished. Where stderr is not a terminal (a
+    log file, a batch job) the bar is not drawn; a line per finished job says the same
+    instead (jobs done of planned, elapsed, time left, the job's result). Nothing is shown
+    with ``--json``. It has every method of :class:`stiffknots.sweeps.SweepListener` without
+    being a subclass, so that the command line starts without importing Dask.
+
+    Time left is the mean pace so far times the jobs *expected*, not only those planned: a
+    (knot, model) not converged gets replicas added, so the plan grows as the sweep goes
+    (:func:`stiffknots.sweeps.run.expected_todo`: the settled ones' mean added replicas for
+    every one still open). Until a first (knot, model) settles it counts the plan alone and
+    says so ("≥")."""
 
     def __init__(self, disable: bool = False, console=None):
         console = err if console is None else console
         self.progress = Progress(
             TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-            TextColumn("jobs"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+            TextColumn("jobs"), TimeElapsedColumn(), TextColumn("ETA {task.fields[eta]}"),
             TextColumn("{task.fields[last]}"), console=console, transient=True,
             disable=disable)
         self.log_lines = not disable and not console.is_terminal
@@ -64,6 +68,7 @@ class SweepProgress:
         self.running: dict[str, float] = {}
         self.lock = threading.Lock()
         self.disable = disable
+        self.expect: float | None = None  # jobs expected in all (None: the plan alone)
 
     def __enter__(self):
         self.progress.__enter__()
@@ -79,16 +84,37 @@ class SweepProgress:
                 highlight=False)
         self.t0 = time.monotonic()
         self.total = result.todo
-        self.task = self.progress.add_task("sweep", total=result.todo, last="")
+        self.task = self.progress.add_task("sweep", total=result.todo, last="", eta="–")
 
     def cluster(self, description: str, threads: int) -> None:
         if self.task is not None:
             self.progress.update(self.task, description=f"sweep ({threads} workers)")
 
+    def time_left(self) -> str:
+        """Time left at the mean pace so far over the jobs expected ("≥" before any (knot,
+        model) settled: the plan alone), e.g. ``"1:02:03 (≈ 480 jobs)"``; "–" before any
+        work is done."""
+        done = self.done + sum(self.running.values())
+        el = time.monotonic() - self.t0
+        if done <= 0 or el <= 0:
+            return "–"
+        planned = self.expect is None or self.expect <= self.total + 0.5
+        total = self.total if planned else self.expect
+        left = el * max(total - done, 0.0) / done
+        if planned:
+            return ("≥ " if self.expect is None else "") + _hms(left)
+        return f"{_hms(left)} (≈ {round(total):,} jobs)"
+
+    def expected(self, jobs: float) -> None:
+        with self.lock:
+            self.expect = float(jobs)
+            self._update()
+
     def _update(self, last: str | None = None) -> None:
         if self.task is None:
             return
-        kw = {"completed": min(self.done + sum(self.running.values()), self.total)}
+        kw = {"completed": min(self.done + sum(self.running.values()), self.total),
+              "eta": self.time_left()}
         if last is not None:
             kw["last"] = last
         self.progress.update(self.task, **kw)
@@ -117,10 +143,9 @@ class SweepProgress:
             self._update(escape(last))
             if self.log_lines:
                 el = time.monotonic() - self.t0
-                left = el * max(self.total - self.done, 0) / self.done
                 self.progress.console.print(
                     f"{time.strftime('%H:%M:%S')} {self.done}/{self.total} jobs, "
-                    f"{_hms(el)} elapsed, ETA {_hms(left)} — {last}",
+                    f"{_hms(el)} elapsed, ETA {self.time_left()} — {last}",
                     markup=False, highlight=False, soft_wrap=True)
 
 

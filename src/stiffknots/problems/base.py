@@ -152,11 +152,36 @@ def knot_code(coords: np.ndarray, closed: bool = True) -> str:
 def start_code(knot_name: str, coords: np.ndarray, closed: bool, start: str) -> str:
     """The polynomial of a starting chain, after checking that it is the requested knot.
 
+    The answer is kept in the disk cache (:mod:`stiffknots._diskcache`) under the chain's exact
+    bytes, the knot, the start, the package version and topoly's version: the built-in
+    embeddings are deterministic, so every later command on the same knot reads its start's
+    polynomial instead of importing topoly (≈ 1.4 s) and computing it in the parent; a chain
+    that differs in one bit is computed anew. Every replica's final chain is still computed
+    and compared with it (:func:`run_job`).
+
     Raises
     ------
     EmbeddingError
-        If the invariant cannot be computed, or if the table names another knot.
+        If the invariant cannot be computed, or if the table names another knot (never
+        cached: it raises every time).
     """
+    import hashlib
+    from importlib.metadata import PackageNotFoundError, version
+
+    from stiffknots._diskcache import cached, source_key
+
+    x = np.ascontiguousarray(coords, dtype=np.float64)
+    try:
+        tv = version("topoly")
+    except PackageNotFoundError:  # pragma: no cover (a dependency)
+        tv = "?"
+    key = source_key(knot_name, start, str(bool(closed)), tv,
+                     hashlib.sha256(x.tobytes()).hexdigest() + str(x.shape))
+    return cached("startcode", key, lambda: _start_code(knot_name, x, closed, start))
+
+
+def _start_code(knot_name: str, coords: np.ndarray, closed: bool, start: str) -> str:
+    """:func:`start_code`, computed."""
     from stiffknots.errors import EmbeddingError, IdentificationError
     from stiffknots.knots.identify import identify_code, normalize_name
 
@@ -380,8 +405,27 @@ class Problem:
         if beads is not None:
             self.beads = V.beads(beads)
 
+    #: the start that new searches after the fresh rounds take (:meth:`favour`); None:
+    #: every replica takes the per-replica starts round-robin
+    favoured: str | None = None
+    #: may :func:`solve` favour a start (True where the starts were the default ``'all'``)
+    adaptive_starts: bool = False
+
+    def favour(self, start: str) -> None:
+        """New searches of the rounds after :attr:`fresh_rounds` start from ``start`` (the
+        start of the lowest search so far): the fresh rounds tried every embedding, and a
+        search from the embedding whose funnel holds the lowest state is the one likeliest to
+        reach it a second time (bench/RESULTS.md, 2026-12-02). Replicas of the fresh rounds
+        keep their round-robin starts."""
+        if start not in self.starts:
+            raise ValueError(f"start {start!r} is not one of this problem's {self.starts}")
+        self.favoured = start
+
     def _start(self, r: int) -> str:
-        """The starting embedding of replica r (the per-replica starts, round-robin)."""
+        """The starting embedding of replica r: the per-replica starts round-robin, or the
+        favoured start for a replica after the fresh rounds (:meth:`favour`)."""
+        if self.favoured is not None and r >= self.fresh_rounds * self.replicas:
+            return self.favoured
         return self.starts[r % len(self.starts)]
 
     def _closed_starts(self, start) -> None:
@@ -506,9 +550,11 @@ def solve(problem: Problem, *, workers: int | None = None,
     from the embeddings; in later rounds, where the problem can (:meth:`Problem.continue_jobs`),
     ``problem.legs_per_round`` replicas continue the lowest searches that still improve
     (:func:`stalled`) — each from its lowest chain, by basin hops — and the others start new
-    searches: on knots whose minima lie within tenths of a percent of each other, a long
-    search walks down to the bottom of its funnel where a short one stops anywhere in it,
-    while new searches keep finding other funnels (bench/RESULTS.md).
+    searches, from the embedding of the lowest search so far where the problem's starts are
+    its defaults (:meth:`Problem.favour`): on knots whose minima lie within tenths of a
+    percent of each other, a long search walks down to the bottom of its funnel where a short
+    one stops anywhere in it, while new searches keep finding other funnels
+    (bench/RESULTS.md).
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
@@ -562,6 +608,8 @@ def _rounds(problem: Problem, nw: int, done: Callable[[Replica], None],
     interrupted = False
     converged, reason, rounds = False, "no replica finished", 0
     for rnd in range(max(1, problem.rounds)):
+        if rnd >= problem.fresh_rounds and results and problem.adaptive_starts:
+            problem.favour(lineage_bests(problem, results)[0].start)
         jobs = problem.jobs(first=rnd * problem.replicas)
         if rnd >= problem.fresh_rounds and results:
             parents = [r for r in lineage_bests(problem, results)

@@ -111,6 +111,7 @@ class ClosedAnneal(Problem):
         self.settings.params.validate(self.beads)
         if initial is None:
             self._closed_starts(start)
+            self.adaptive_starts = isinstance(start, str) and start == "all"
         else:
             from stiffknots.problems.base import start_code
 

@@ -199,14 +199,15 @@ def connect(scheduler: str | None = None, workers: int | None = None,
 
 
 @functools.lru_cache(maxsize=8)
-def _problem_jobs(knot: str, model: Any, budget: Any, seed: int, settings_text: str
-                  ) -> dict[int, Any]:
-    """The jobs of one (knot, model) problem, built once per worker process."""
+def _problem_jobs(knot: str, model: Any, budget: Any, seed: int, settings_text: str,
+                  start: str | None = None) -> dict[int, Any]:
+    """The jobs of one (knot, model) problem, built once per worker process (and once per
+    favoured start of its added replicas)."""
     import json
 
     from stiffknots.sweeps.plan import build_jobs
 
-    return build_jobs(knot, model, budget, seed, json.loads(settings_text))
+    return build_jobs(knot, model, budget, seed, json.loads(settings_text), start)
 
 
 def run_task(job: Any, budget: Any) -> Any:
@@ -227,7 +228,8 @@ def run_task(job: Any, budget: Any) -> Any:
     from stiffknots.problems.pool import reporting_to
     from stiffknots.store import canonical_json
 
-    jobs = _problem_jobs(job.knot, job.model, budget, job.seed, canonical_json(job.settings))
+    jobs = _problem_jobs(job.knot, job.model, budget, job.seed, canonical_json(job.settings),
+                         job.start)
     pjob = jobs[job.replica]
     pjob = replace(pjob, coords=pjob.coords.copy())  # the cached start stays untouched
     try:

@@ -17,8 +17,12 @@ closure of its braid word, the 4-fold cage of a two-box rational knot and the 80
 :data:`~stiffknots.knots.families.EIGHTY_FAMILY`, since a failed search costs seconds, and
 not for the n = i knots, whose ground state is the circular braid (§VI C): an 80 start would
 spend a replica on a state known to lie above it), shared round-robin among the replicas
-(replica r gets start r mod k). The settings record the policy (``"start":
-"braid,cage,eighty"``), each stored row the start its replica got.
+(replica r gets start r mod k) — except the replicas added to a (knot, model) not converged
+from replica :data:`FAVOUR_FROM` on (by then every start has had a replica): they start from
+the embedding of the lowest replica stored before them (:func:`favoured_start`), the funnel
+likeliest to hold the ground state a second time (measured in ``anneal``, bench/RESULTS.md,
+2026-12-02). The settings record the policy (``"start": "braid,cage,eighty;added:lowest"``),
+each stored row the start its replica got.
 """
 
 from __future__ import annotations
@@ -35,13 +39,18 @@ from stiffknots.store import ReplicaKey, Store, canonical_json, settings_hash
 from stiffknots.sweeps.budgets import Budget
 from stiffknots.sweeps.models import Model, for_beads
 
-__all__ = ["PROBLEM", "START_POLICY", "SweepJob", "sweep_settings", "resolve_knots",
-           "plan_sweep", "pending", "sweep_starts", "build_jobs"]
+__all__ = ["PROBLEM", "START_POLICY", "FAVOUR_FROM", "SweepJob", "sweep_settings",
+           "resolve_knots", "plan_sweep", "pending", "sweep_starts", "favoured_start",
+           "build_jobs"]
 
 #: The problem every sweep solves (``settings["problem"]``).
 PROBLEM = "anneal"
-#: The starting embeddings a sweep draws from, in order (module docstring).
-START_POLICY = "braid,cage,eighty"
+#: The starting embeddings a sweep draws from, in order, and the rule of the added replicas
+#: (module docstring).
+START_POLICY = "braid,cage,eighty;added:lowest"
+#: The first replica that may take the favoured start instead of its round-robin one (there
+#: are at most 3 starts: replicas 0, 1, 2 try each once).
+FAVOUR_FROM = 3
 
 
 def sweep_settings(model: Model, budget: Budget) -> dict[str, Any]:
@@ -74,6 +83,9 @@ class SweepJob:
     settings : dict
         :func:`sweep_settings` of the model and budget.
     key : ReplicaKey
+    start : str or None
+        The embedding it starts from when it is not its round-robin one (an added replica,
+        :func:`favoured_start`); None: round-robin.
     """
 
     knot: str
@@ -82,6 +94,7 @@ class SweepJob:
     seed: int
     settings: dict = field(compare=False, hash=False, repr=False)
     key: ReplicaKey = field(compare=False, hash=False, repr=False)
+    start: str | None = field(default=None, compare=False, hash=False)
 
     @property
     def id(self) -> str:
@@ -190,12 +203,32 @@ def sweep_starts(knot: Any, beads: int, replicas: int) -> list[str]:
     return split_replicas(found, replicas)
 
 
+def favoured_start(store: Store, job: SweepJob, before: int) -> str | None:
+    """The start of the lowest stored replica of ``job``'s (knot, model) ensemble among
+    replicas 0 … ``before`` − 1 — the start an added replica ``job`` takes when
+    ``job.replica`` ≥ :data:`FAVOUR_FROM` (module docstring); None otherwise or when none of
+    them is stored. Deterministic: it reads only replicas that ended before ``job`` was
+    planned, so a resumed sweep gives every replica the same start."""
+    if job.replica < FAVOUR_FROM:
+        return None
+    k = job.key
+    rows = [r for r in store.replicas(knot=k.knot, exclusion=k.exclusion, beads=k.beads,
+                                      thickness=k.thickness, settings_hash=k.settings_hash,
+                                      seed=k.seed)
+            if r["replica"] < before]
+    if not rows:
+        return None
+    return min(rows, key=lambda r: (r["epsilon"], r["replica"]))["start"]
+
+
 def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
-               settings: Mapping[str, Any]) -> dict[int, Job]:
+               settings: Mapping[str, Any], start: str | None = None) -> dict[int, Job]:
     """The problem's jobs of one (knot, model): replica → :class:`~stiffknots.problems.base.Job`.
 
     Builds the :class:`~stiffknots.problems.closed.ClosedAnneal` problem (starts, their
-    HOMFLY-PT polynomials) and checks that its settings are those of the key.
+    HOMFLY-PT polynomials) and checks that its settings are those of the key. ``start``: every
+    replica starts from it (an added replica's favoured start, :func:`favoured_start`)
+    instead of the round-robin starts; it must be one of the knot's starts.
 
     Raises
     ------
@@ -209,6 +242,13 @@ def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
 
     k = get_knot(knot)
     starts = sweep_starts(k, model.beads, budget.replicas)
+    if start is not None:
+        from stiffknots.knots.starts import default_starts
+
+        if start not in default_starts(k, model.beads):
+            raise RuntimeError(f"{knot} has no start {start!r} in a sweep; this is a bug in "
+                               "stiffknots, please report it")
+        starts = [start] * budget.replicas
     problem = ClosedAnneal(k.name, beads=model.beads, moves=budget.moves,
                            replicas=budget.replicas, seed=seed, params=model.params(),
                            start=starts, rounds=1, polish=settings.get("polish", True))

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -50,9 +50,16 @@ from stiffknots.sweeps.cluster import (
 )
 from stiffknots.sweeps.convergence import is_converged
 from stiffknots.sweeps.models import Model
-from stiffknots.sweeps.plan import SweepJob, pending, plan_sweep, sweep_settings
+from stiffknots.sweeps.plan import (
+    SweepJob,
+    favoured_start,
+    pending,
+    plan_sweep,
+    sweep_settings,
+)
 
-__all__ = ["SweepListener", "SweepResult", "run_sweep", "store_replica", "ensemble_converged"]
+__all__ = ["SweepListener", "SweepResult", "run_sweep", "store_replica", "ensemble_converged",
+           "expected_todo"]
 
 
 class SweepListener:
@@ -75,6 +82,11 @@ class SweepListener:
 
     def added(self, jobs: int) -> None:
         """``jobs`` more jobs to run: replicas added to a (knot, model) not yet converged."""
+
+    def expected(self, jobs: float) -> None:
+        """The jobs this sweep is now expected to run in all: those planned, and for every
+        (knot, model) still open the replicas the settled ones were added on average
+        (:func:`expected_todo`) — the basis of an honest time left."""
 
 
 @dataclass
@@ -175,6 +187,24 @@ def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str
     return is_converged(st["ground"])
 
 
+def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) -> float:
+    """Jobs a sweep is expected to run in all: the ``todo`` planned so far, plus, for every
+    (knot, model) not yet settled, the replicas beyond the ``base`` (the budget's) that the
+    settled ones needed on average, less those it already has. A (knot, model) is settled
+    when its replicas have ended and no more will be added (converged, or at
+    ``max_replicas``). Before any is settled, the plan alone (the estimate can only rise).
+
+    ``groups`` maps (knot, model) to ``{"replicas": planned so far, "settled": bool}``.
+    """
+    settled = [g["replicas"] - base for g in groups.values() if g["settled"]]
+    if not settled:
+        return float(todo)
+    mean = sum(settled) / len(settled)
+    more = sum(max(0.0, base + mean - g["replicas"]) for g in groups.values()
+               if not g["settled"])
+    return todo + more
+
+
 def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, store: Store, *,
               seed: int = 0, scheduler: str | None = None, workers: int | None = None,
               max_replicas: int | None = None, step: int = 2,
@@ -243,7 +273,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
     groups: dict[tuple[str, str], dict] = {}
     for j in jobs:
         groups.setdefault(j.group, {"knot": j.knot, "model": j.model,
-                                    "replicas": budget.replicas, "open": 0})
+                                    "replicas": budget.replicas, "open": 0,
+                                    "settled": False})
     for j in todo:
         groups[j.group]["open"] += 1
 
@@ -254,6 +285,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             n = min(max_r, g["replicas"] + step)
             more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
                               seed)[g["replicas"]:]
+            more = [replace(j, start=favoured_start(store, j, g["replicas"])) for j in more]
             g["replicas"] = n
             new = pending(more, store)
             res.jobs += len(more)
@@ -262,7 +294,11 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             if new:
                 g["open"] += len(new)
                 return new
+        g["settled"] = True
         return []
+
+    def expect() -> None:
+        listener.expected(expected_todo(groups, res.todo, budget.replicas))
 
     # replicas added to a (knot, model) run before the jobs of later knots, so that the knots
     # are finished in the order planned: a sweep stopped after an hour has whole answers for
@@ -273,6 +309,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         if g["open"] == 0:
             feed.extendleft(reversed(extend(g)))
     listener.started(res)
+    expect()
     if not feed or not run:
         res.wall_seconds = time.perf_counter() - t0
         return res
@@ -332,6 +369,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                 if new:
                     feed.extendleft(reversed(new))
                     listener.added(len(new))
+                expect()
 
         try:
             top_up()
