@@ -608,11 +608,13 @@ def _rounds(problem: Problem, nw: int, done: Callable[[Replica], None],
     interrupted = False
     converged, reason, rounds = False, "no replica finished", 0
     for rnd in range(max(1, problem.rounds)):
-        if rnd >= problem.fresh_rounds and results and problem.adaptive_starts:
-            problem.favour(lineage_bests(problem, results)[0].start)
+        later = rnd >= problem.fresh_rounds and bool(results)
+        bests = lineage_bests(problem, results) if later else []
+        if later and problem.adaptive_starts:
+            problem.favour(bests[0].start)
         jobs = problem.jobs(first=rnd * problem.replicas)
-        if rnd >= problem.fresh_rounds and results:
-            parents = [r for r in lineage_bests(problem, results)
+        if later:
+            parents = [r for r in bests
                        if not stalled(problem, results, r)][:problem.legs_per_round]
             legs = problem.continue_jobs(parents, first=rnd * problem.replicas) or []
             for j, par in zip(legs, parents, strict=True):
