@@ -354,3 +354,21 @@ def test_stall_stop_is_the_minimum_to_far_below_its_promise(monkeypatch):
     assert fast.iterations <= slow.iterations
     assert fast.energy == pytest.approx(slow.energy, rel=1e-9)
     assert fast.energy <= fast.energy_before
+
+
+@pytest.mark.parametrize("reg", [0.0, 1e-12])
+def test_kkt_matrix_is_the_block_matrix(reg):
+    """The KKT matrix assembled from the blocks' triplets is [h aᵀ; a −reg·I] entry by
+    entry (the polish factorises it; sp.bmat built the same matrix before)."""
+    import scipy.sparse as sp
+
+    from stiffknots.engine.polish import _kkt_matrix
+
+    h = sp.random(90, 90, density=0.05, random_state=1, format="csr")
+    h = (h + h.T + sp.identity(90)).tocsr()
+    a = sp.random(31, 90, density=0.05, random_state=2, format="csr")
+    lower = -reg * sp.identity(31) if reg > 0 else None
+    want = sp.bmat([[h, a.T], [a, lower]], format="csc")
+    got = _kkt_matrix(h, a, reg)
+    assert got.format == "csc" and got.shape == (121, 121) and got.nnz == want.nnz
+    assert abs(got - want).max() == 0.0
