@@ -804,31 +804,36 @@ class _Problem:
         return np.einsum("ij,ij->i", b, b) - 1.0, b
 
     # ---- sparse matrices (free coordinates, interleaved x, y, z) --------------------------
-    def _expand(self, rows, beads, vecs, nrows):
-        """Rows with 3-vector entries on beads → CSR (nrows, 3 nf); clamped beads dropped."""
+    def _triplets(self, rows, beads, vecs):
+        """Rows with 3-vector entries on beads → (row, column, value) triplets over the free
+        coordinates (interleaved x, y, z); clamped beads dropped."""
         f = self.fmap[beads]
         ok = f >= 0
         rows, f, vecs = rows[ok], f[ok], vecs[ok]
-        r = np.repeat(rows, 3)
-        c = (3 * f[:, None] + np.arange(3)).ravel()
-        return sp.csr_matrix((vecs.ravel(), (r, c)), shape=(nrows, 3 * self.nf))
+        return (np.repeat(rows, 3), (3 * f[:, None] + np.arange(3)).ravel(), vecs.ravel())
 
     def jacobian(self, pos, b, idx, wts, direc, rigid=True):
-        """[bond rows; rigid rows (if ``rigid``); constraint rows]."""
+        """[bond rows; rigid rows (if ``rigid``); constraint rows], as CSR, assembled from
+        the blocks' triplets in one go (the same matrix as stacking the blocks, tested)."""
         nb = len(self.bk)
         rows = np.arange(nb)
-        mats = [self._expand(np.r_[rows, rows], np.r_[self.bk1, self.bk],
-                             np.r_[2 * b, -2 * b], nb)]
+        parts = [self._triplets(np.r_[rows, rows], np.r_[self.bk1, self.bk],
+                                np.r_[2 * b, -2 * b])]
+        top = nb
         if rigid and self.nrigid:
-            mats.append(self.rigid_rows(pos))
+            g = self.rigid_rows(pos).tocoo()
+            parts.append((g.row + top, g.col, g.data))
+            top += g.shape[0]
         m = len(idx)
         if m:
-            rows = np.repeat(np.arange(m), 4)
             beads = idx.ravel()
             vecs = (wts[:, :, None] * direc[:, None, :]).reshape(-1, 3)
             ok = beads >= 0
-            mats.append(self._expand(rows[ok], beads[ok], vecs[ok], m))
-        return sp.vstack(mats, format="csr")
+            r, c, v = self._triplets(np.repeat(np.arange(m), 4)[ok], beads[ok], vecs[ok])
+            parts.append((r + top, c, v))
+            top += m
+        r, c, v = (np.concatenate(x) for x in zip(*parts, strict=True))
+        return sp.csr_matrix((v, (r, c)), shape=(top, 3 * self.nf))
 
     def rigid_rows(self, pos):
         """Six sparse gauge rows that remove the rigid motions (closed chains): bead 0 does not
