@@ -371,15 +371,18 @@ def test_time_left_counts_the_replicas_still_to_be_added():
     with bar:
         bar.started(SimpleNamespace(skipped=0, jobs=3, todo=3))
         bar.t0 = time.monotonic() - 100.0
-        bar.expected(10.0)
+        bar.expected(10.0, 1)
         bar.finished(SimpleNamespace(id="3_1/bead/r0"),
                      {"shape": "CB", "multiplicity": 2, "epsilon": 79.0182}, None)
-        bar.expected(3.0)  # everything settled as planned: the plan is the estimate
+        bar.expected(3.0, 2)  # everything settled as planned: the plan is the estimate
         bar.finished(SimpleNamespace(id="3_1/bead/r1"),
                      {"shape": "CB", "multiplicity": 2, "epsilon": 79.0182}, None)
     lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
     assert "1/3 jobs, 0:01:40 elapsed, ETA 0:15:00 (≈ 10 jobs) — 3_1/bead/r0" in lines[0]
     assert "2/3 jobs, 0:01:40 elapsed, ETA 0:00:50 — 3_1/bead/r1" in lines[1]
+    # nothing settled yet (a sweep's first estimate): the plan alone, a lower bound
+    bar.expected(3.0, 0)
+    assert bar.time_left().startswith("≥ ")
 
 
 def test_expected_todo_adds_the_settled_mean_to_every_open_knot():

@@ -157,7 +157,7 @@ def test_replicas_added_until_converged(tmp_path):
     with Store(tmp_path / "s.db") as st:
         rec = Recorder()
         rec.added = lambda n: rec.events.append(("added", n))
-        rec.expected = lambda n: rec.events.append(("expected", n))
+        rec.expected = lambda n, settled: rec.events.append(("expected", n, settled))
         res = run_sweep(["3_1", "7_4"], models, budget, st, seed=0, workers=2,
                         max_replicas=4, listener=rec)
         assert not res.failed and res.added > 0, "nothing added: the test tested nothing"
@@ -166,6 +166,10 @@ def test_replicas_added_until_converged(tmp_path):
         # the jobs expected: the plan before anything settled, every job run once all settled
         expected = [e[1] for e in rec.kinds("expected")]
         assert expected[0] == 4 and expected[-1] == res.todo == res.ran
+        # at the start nothing has settled (the progress bar marks that estimate "≥"); at
+        # the end both (knot, model) have
+        settled = [e[2] for e in rec.kinds("expected")]
+        assert settled[0] == 0 and settled[-1] == 2 and settled == sorted(settled)
         for knot in ("3_1", "7_4"):
             rows = st.replicas(knot=knot)
             first = [{"label": r["shape"], "multiplicity": r["multiplicity"],

@@ -105,9 +105,9 @@ class SweepProgress:
             return ("≥ " if self.expect is None else "") + _hms(left)
         return f"{_hms(left)} (≈ {round(total):,} jobs)"
 
-    def expected(self, jobs: float) -> None:
+    def expected(self, jobs: float, settled: int) -> None:
         with self.lock:
-            self.expect = float(jobs)
+            self.expect = float(jobs) if settled else None  # None: the plan alone, "≥"
             self._update()
 
     def _update(self, last: str | None = None) -> None:

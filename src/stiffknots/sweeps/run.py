@@ -83,10 +83,12 @@ class SweepListener:
     def added(self, jobs: int) -> None:
         """``jobs`` more jobs to run: replicas added to a (knot, model) not yet converged."""
 
-    def expected(self, jobs: float) -> None:
+    def expected(self, jobs: float, settled: int) -> None:
         """The jobs this sweep is now expected to run in all: those planned, and for every
         (knot, model) still open the replicas the settled ones were added on average
-        (:func:`expected_todo`) — the basis of an honest time left."""
+        (:func:`expected_todo`) — the basis of an honest time left. ``settled``: how many
+        (knot, model) have settled so far; while it is 0, ``jobs`` is the plan alone, a lower
+        bound."""
 
 
 @dataclass
@@ -298,7 +300,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         return []
 
     def expect() -> None:
-        listener.expected(expected_todo(groups, res.todo, budget.replicas))
+        listener.expected(expected_todo(groups, res.todo, budget.replicas),
+                          sum(1 for g in groups.values() if g["settled"]))
 
     # replicas added to a (knot, model) run before the jobs of later knots, so that the knots
     # are finished in the order planned: a sweep stopped after an hour has whole answers for
