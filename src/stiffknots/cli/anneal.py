@@ -152,6 +152,9 @@ def anneal(
     # every input is checked (and the folders claimed) before any work
     checkpoint = claim_checkpoint(checkpoint, resume)
     out_dir = prepare_out(out_dir, overwrite)
+    from stiffknots.knots.catalogue import get_knot
+
+    get_knot(name)  # an unknown name fails here, before any worker process has started
     # the workers start now and import the solvers while this process builds the problem
     with WorkerPool(default_workers(replicas)).start() as pool:
         problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
