@@ -21,11 +21,13 @@ import ctypes
 import multiprocessing as mp
 import os
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 from typing import Any
 
 from stiffknots.errors import WorkerError
@@ -193,7 +195,8 @@ class WorkerPool:
                         res = f.result()  # re-raises a job's exception here
                     except BrokenProcessPool:
                         raise WorkerError("a worker process died (a crash or the out-of-memory "
-                                          "killer) before its replica finished") from None
+                                          "killer) before its replica finished"
+                                          + _unguarded_script_hint()) from None
                     results.append(res)
                     if on_done:
                         on_done(res)
@@ -254,6 +257,26 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
         return pool.run(job, arg_list, on_done, on_progress)
     with WorkerPool(max(1, min(workers, len(arg_list)))) as own:
         return own.run(job, arg_list, on_done, on_progress)
+
+
+def _unguarded_script_hint() -> str:
+    """The likeliest cause of workers that die at once, when it applies: the caller's script
+    has no ``if __name__ == "__main__":``. Spawned workers import the main script again; an
+    unguarded call then starts the solve once more inside each worker, which multiprocessing
+    refuses, so every worker dies before its first job."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if path is None or getattr(main, "__spec__", None) is not None:
+        return ""  # an interactive session, or ``python -m`` (a package's guarded __main__)
+    try:
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return ""
+    if "__main__" in text:
+        return ""
+    return (f"; {Path(path).name} has no `if __name__ == \"__main__\":` — worker processes "
+            "are started with spawn and import the script again, so put the calls of "
+            "stiffknots that run replicas under that guard")
 
 
 def _terminate(ex: ProcessPoolExecutor) -> None:
