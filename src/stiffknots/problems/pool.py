@@ -289,3 +289,11 @@ def _terminate(ex: ProcessPoolExecutor) -> None:
     for p in procs:
         with contextlib.suppress(Exception):
             p.join(5)
+    # and let the executor's manager thread finish before anything else happens: an error
+    # that ended the interpreter while it still ran (a usage error found just after the pool
+    # started, on a cold start) raced its atexit wake-up against the closing of its pipe
+    # ("Bad file descriptor" traceback after the one-line error)
+    mgr = getattr(ex, "_executor_manager_thread", None)
+    if mgr is not None:
+        with contextlib.suppress(Exception):
+            mgr.join(5)
