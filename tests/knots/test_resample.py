@@ -66,3 +66,20 @@ def test_bad_arguments():
         resample(regular_polygon(30), 2)
     with pytest.raises(InvalidParameter, match="w_over_L"):
         resample(regular_polygon(30), 20, w_over_L=-1)
+
+
+@pytest.mark.parametrize("t", [0.25, 0.75])
+def test_a_slid_unit_chain_resamples_to_unit_bonds(t):
+    # a 5_2 chain slid by a fraction of a bond along itself has near-unit bonds; its equal
+    # chords came out unit only to ≈ 10⁻¹¹ (Brent's root of the closing step) and resample()
+    # raised "bonds not unit after resampling"
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.embedding import embed_braid
+
+    k = get_knot("5_2")
+    x = embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=150)
+    y = (1 - t) * x + t * np.roll(x, -1, axis=0)
+    c = resample(Chain(y, closed=True), 150)
+    bonds = np.linalg.norm(np.roll(c.coords, -1, axis=0) - c.coords, axis=1)
+    assert np.max(np.abs(bonds - 1.0)) <= 1e-12
+    assert c.meta["homfly"] == homfly_code(x)
