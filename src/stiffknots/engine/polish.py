@@ -106,8 +106,12 @@ composes them with scipy's sparse LU.
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import logging
 import math
+import os
+import sys
 import time
 from dataclasses import dataclass
 
@@ -947,7 +951,7 @@ def _solve_kkt(h, a, rhs_top, rhs_bot, reg=0.0):
     n = h.shape[0]
     k = _kkt_matrix(h, a, reg)
     try:
-        lu = splu(k)
+        lu = _splu(k)
         z = lu.solve(np.r_[rhs_top, rhs_bot])
     except RuntimeError:
         return None
@@ -1019,11 +1023,64 @@ class _SchurInverse:
         return cur
 
 
+_LIBC: list = []
+
+
+def _libc():
+    """The C library (for fflush), or None where it cannot be loaded."""
+    if not _LIBC:
+        try:
+            _LIBC.append(ctypes.CDLL(None))
+        except OSError:  # pragma: no cover - every POSIX system has one
+            _LIBC.append(None)
+    return _LIBC[0]
+
+
+@contextlib.contextmanager
+def _superlu_diagnostics_held():
+    """Hold back what SuperLU prints while it factorises.
+
+    On an exactly singular matrix (dependent constraint pieces, e.g. several tube pieces
+    holding the same motion) SuperLU's factorisation prints LAPACK-style lines such as
+    ``** On entry to DTRSV parameter number 6 had an illegal value`` on C's standard output
+    and then raises ``RuntimeError: Factor is exactly singular``, which the callers handle
+    (a retry with a tiny dual regularisation). The lines said nothing a user could act on and
+    read like a failure of the result, so C's standard output and error point at the null
+    device for the factorisation alone (C's buffers are flushed on both sides of it)."""
+    libc = _libc()
+    if libc is None:  # pragma: no cover
+        yield
+        return
+    for f in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            f.flush()
+    libc.fflush(None)
+    saved = (os.dup(1), os.dup(2))
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        yield
+    finally:
+        libc.fflush(None)
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, null):
+            os.close(fd)
+
+
+def _splu(k):
+    """``splu(k)`` with SuperLU's diagnostics held back (:func:`_superlu_diagnostics_held`);
+    a singular matrix still raises RuntimeError."""
+    with _superlu_diagnostics_held():
+        return splu(k)
+
+
 def _factor_kkt(h, a):
     """Sparse LU of [h aᵀ; a 0] (with a tiny dual regularisation if it is singular)."""
     for reg in (0.0, 1e-12, 1e-9):
         try:
-            lu = splu(_kkt_matrix(h, a, reg))
+            lu = _splu(_kkt_matrix(h, a, reg))
         except RuntimeError:
             continue
         test = lu.solve(np.ones(h.shape[0] + a.shape[0]))
