@@ -164,6 +164,20 @@ def test_cli_open_and_tightest_json(capsys):
         assert key in d
     assert d["knot"] == "3_1" and d["excess_length"] == 30
     assert d["tension"] == pytest.approx(d["eps_e"] / 30**2)
+    # a scan: every point says its own width (N grows with L_e at fixed extension), the top
+    # level says the width of the point whose numbers it repeats (the last), and μ = −dE/dL_e
+    # is reported next to E/L_e (§VIII)
+    app(["open", "3_1", "--excess-length", "20,40", "--moves", "100000", "--replicas", "1",
+         "--exclusion", "tube", "--w", "0.1", "--json"], standalone_mode=False)
+    d = json.loads(capsys.readouterr().out)
+    n = [p["beads"] for p in d["points"]]
+    assert n[0] < n[1] and [p["width"]["beads"] for p in d["points"]] == n
+    assert d["beads"] == n[-1] and d["width"] == d["points"][-1]["width"]
+    assert d["width"]["w_over_L"] == pytest.approx(0.1 / n[-1])
+    assert d["eps_e"] == d["points"][-1]["eps_e"]
+    (fd,) = d["finite_differences"]
+    e = [p["energy"] for p in d["points"]]
+    assert fd["mu_finite_difference"] == pytest.approx(-(e[1] - e[0]) / 20)
     app(["tightest", "3_1", "--beads", "60", "--moves", "200000", "--replicas", "1", "--json"],
         standalone_mode=False)
     d = json.loads(capsys.readouterr().out)

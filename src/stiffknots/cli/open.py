@@ -109,7 +109,6 @@ def open_knot(
                                                replicas, seed, params)
     for p in problems:
         _set_width(p, w_over_l)
-    params = problems[0].settings.params  # the width reported is the first chain's
     n_min = min(p.beads for p in problems)
     if m_max is not None and not 1 <= m_max <= n_min - 4:
         raise UserError(f"--m-max must be an integer in [1, {n_min - 4}] (N − 4 for the open "
@@ -118,12 +117,15 @@ def open_knot(
     results, stopped = _run(problems, follow, replicas, json_, w_over_l)
     points = [_point(r) for r in results]
     res0, last = results[0], points[-1]
+    # the top level reports the last point: its numbers, and the width they were computed at
+    # (every point carries its own: at fixed extension N grows with L_e)
+    params = results[-1].settings["params"]
     summary = {
         "knot": res0.knot, "ensemble": ensemble,
         **{k: last[k] for k in ("tension", "excess_length", "eps_e", "shape")},
         "bounds": res0.bounds, "points": points, "seed": seed, "moves": moves,
-        "replicas": replicas, "beads": res0.beads, "params": params.as_dict(),
-        "width": width_of(params, res0.beads), "version": res0.version, "units": UNITS,
+        "replicas": replicas, "beads": last["beads"], "params": params,
+        "width": last["width"], "version": res0.version, "units": UNITS,
         "interrupted": stopped is not None,
     }
     summary["thin_limit"] = _thin_limit(last["eps_e"], res0.bounds, summary["width"]["text"])
@@ -135,6 +137,7 @@ def open_knot(
         y = [p["tension"] for p in points]
         summary["fit_eps_e"] = sum(a * b for a, b in zip(x, y, strict=True)) / sum(
             a * a for a in x)
+        summary["finite_differences"] = finite_differences(points)
     if out_dir is not None:
         summary["files"] = _write(out_dir, results, points, summary)
     if json_:
@@ -247,8 +250,27 @@ def _run(problems, follow, replicas, quiet, w_over_l=None):
     return results, None
 
 
+def finite_differences(points: list[dict]) -> list[dict]:
+    """μ = −dE/dL_e between neighbouring excess lengths next to E/L_e at their geometric
+    midpoint (:meth:`stiffknots.problems.open_extension.TensionScan.finite_differences`: the
+    paper's μ = E/L_e checked by an independent estimate, §VIII); each pair says whether its
+    two ends have the same shape (otherwise the difference compares two states)."""
+    from types import SimpleNamespace
+
+    from stiffknots.problems.open_extension import TensionScan
+
+    pts = sorted(points, key=lambda p: p["excess_length"])
+    fd = TensionScan.finite_differences(SimpleNamespace(points=pts))
+    for d, a, b in zip(fd, pts[:-1], pts[1:], strict=True):
+        d["ratio"] = d["mu_finite_difference"] / d["mu_E_over_L"]
+        d["same_shape"] = a["shape"] == b["shape"]
+    return fd
+
+
 def _point(r) -> dict:
-    """One row of the output: the physics of one result, and its checks."""
+    """One row of the output: the physics of one result, its width and its checks."""
+    from stiffknots.engine.params import MoveParams
+
     d = r.to_dict()
     keys = ("excess_length", "energy", "eps_e", "tension", "shape", "beads", "knot_verified",
             "wall_time")
@@ -256,6 +278,7 @@ def _point(r) -> dict:
         keys += ("force", "force_balance")
     p = {k: d[k] for k in keys}
     p["requested_force"] = getattr(r, "requested_force", None)
+    p["width"] = width_of(MoveParams(**r.settings["params"]), r.beads)
     p["min_segment_distance"] = r.best.min_segment_distance
     p["shape_features"] = d["shape_features"]
     return p
@@ -311,24 +334,35 @@ def _thin_limit(eps_e, bounds, width_text) -> dict:
 def _table(summary, res0) -> None:
     b = res0.bounds
     force = summary["ensemble"] == "force"
-    t = Table(title=escape(f"open {res0.knot} ({summary['width']['text']}): ε_e bounds "
+    wd = summary["width"]
+    model = (f"tube w = {wd['w']:g}" if wd["exclusion"] == "tube"
+             else f"bead rule d = {wd['d']:.4g}")
+    t = Table(title=escape(f"open {res0.knot} ({model}; N and w/L per row): ε_e bounds "
                            f"[{fmt(b['eps_e_lower'])}, {fmt(b['eps_e_upper'])}] (§VIII, thin "
                            "limit)"))
-    cols = (("F", "L_e", "μ = E/L_e", "μ/F") if force else ("L_e", "N", "F asked", "μ = E/L_e"))
+    cols = (("F", "L_e", "N", "w/L", "μ = E/L_e", "μ/F") if force
+            else ("L_e", "N", "w/L", "F asked", "μ = E/L_e"))
     for col in (*cols, "ε_e = E·L_e", "shape", "knot", "s"):
         t.add_column(col, justify="right")
     for p in summary["points"]:
+        wl = f"{p['width']['w_over_L']:.2g}"
         if force:
-            head = (f"{p['force']:.4g}", f"{p['excess_length']:.2f}", f"{p['tension']:.5g}",
-                    f"{p['force_balance']:.3f}")
+            head = (f"{p['force']:.4g}", f"{p['excess_length']:.2f}", str(p["beads"]), wl,
+                    f"{p['tension']:.5g}", f"{p['force_balance']:.3f}")
         else:
             asked = p["requested_force"]
-            head = (f"{p['excess_length']:.0f}", str(p["beads"]),
+            head = (f"{p['excess_length']:.0f}", str(p["beads"]), wl,
                     "" if asked is None else f"{asked:.3g}", f"{p['tension']:.5g}")
         t.add_row(*head, f"{p['eps_e']:.3f}", str(p["shape"]),
                   "✓" if p["knot_verified"] else "✗", f"{p['wall_time']:.0f}")
     out.print(t)
-    out.print(f"thin limit: {summary['thin_limit']['note']}", markup=False, highlight=False)
+    out.print(f"thin limit (last row): {summary['thin_limit']['note']}", markup=False,
+              highlight=False)
     if "fit_eps_e" in summary:
         out.print(f"fit μ L_e²/C = {summary['fit_eps_e']:.3f} (2π² = {2 * math.pi ** 2:.3f})",
+                  markup=False, highlight=False)
+    for d in summary.get("finite_differences", []):
+        out.print(f"μ = −dE/dL_e at L_e ≈ {d['L_e']:.1f}: {d['mu_finite_difference']:.5g} "
+                  f"against E/L_e {d['mu_E_over_L']:.5g} (ratio {d['ratio']:.3f}"
+                  + ("" if d["same_shape"] else "; the two points differ in shape") + ")",
                   markup=False, highlight=False)
