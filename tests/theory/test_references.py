@@ -39,3 +39,14 @@ def test_tabulated_cage_is_the_structure_solve():
     from stiffknots.theory.structures import structure_energy
 
     assert structure_energy("4C")["epsilon"] == pytest.approx(EPS_4C, abs=1e-8)
+
+
+def test_note_below_the_thin_limit_and_small_excesses():
+    # the unknot at N = 150: the regular 150-gon, N²(1 − cos 2π/N), lies below 2π²
+    eps = 150**2 * (1 - math.cos(2 * math.pi / 150))
+    note = thin_limit_note(eps, "CB", 1, "bead rule d = 0.7071, N = 150")
+    assert note["excess"] < 0 and "-0.015 %" in note["note"]
+    assert "discretisation" in note["note"]
+    # 3_1 at N = 600: +0.005 %, shown to two significant figures
+    note = thin_limit_note(8 * math.pi**2 * 1.00005, "CB", 2, "N = 600")
+    assert "+0.005 %" in note["note"] and "discretisation" not in note["note"]

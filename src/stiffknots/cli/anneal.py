@@ -205,8 +205,12 @@ def anneal(
               + f" — {obs['shape_reason']}", markup=False, highlight=False)
     out.print(("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
-    out.print(f"best ε = {res.best.epsilon:.4f} at {width['text']} (a finite width: the thin "
-              f"limit w/L → 0 lies below); bounds [{fmt(b['lower'])}, {fmt(b['upper'])}] "
+    below = (res.thin_limit.get("excess") or 0.0) < 0
+    where = ("below the thin limit of its shape: the discretisation of N beads lowers ε more "
+             "than the width raises it" if below
+             else "a finite width: the thin limit w/L → 0 lies below")
+    out.print(f"best ε = {res.best.epsilon:.4f} at {width['text']} ({where}); "
+              f"bounds [{fmt(b['lower'])}, {fmt(b['upper'])}] "
               f"({b['attained_by']}); wall time {res.wall_time:.1f} s",
               markup=False, highlight=False)
     out.print(f"thin limit: {res.thin_limit['note']}", markup=False, highlight=False)

@@ -80,6 +80,12 @@ def thin_limit_note(epsilon: float | None, shape: str | None, multiplicity: int 
                          "of the thin-limit ε* (ε*_w rises with w, §V A); no w = 0 value is "
                          f"known for shape {shape!r} (see `stiffknots thin-limit`)")}
     excess = epsilon / ref["epsilon"] - 1.0
-    return {**ref, "excess": excess,
-            "note": (f"computed at {width_text}: {100 * excess:+.2f} % from the thin limit "
-                     f"of its shape {ref['shape']}, ε = {ref['epsilon']:.4f} ({ref['method']})")}
+    pct = 100 * excess
+    # two significant figures below 0.1 % (3_1 at N = 600 is +0.005 %, not "+0.00 %")
+    text = f"{pct:+.2g}" if 0 < abs(pct) < 0.1 else f"{pct:+.2f}"
+    note = (f"computed at {width_text}: {text} % from the thin limit of its shape "
+            f"{ref['shape']}, ε = {ref['epsilon']:.4f} ({ref['method']})")
+    if excess < 0:  # N beads of a thin chain: the discretisation wins over the width
+        note += ("; below it because the discretisation of N beads lowers ε (a regular "
+                 "N-gon: N²(1 − cos 2π/N) < 2π²) more than the width raises it")
+    return {**ref, "excess": excess, "note": note}
