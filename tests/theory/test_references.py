@@ -31,7 +31,7 @@ def test_unknown_shapes_have_no_value():
 def test_note_states_width_and_excess():
     note = thin_limit_note(79.0182, "CB", 2, "bead rule d = 0.7071, N = 150 (w/L ≈ 0.0047)")
     assert note["excess"] == pytest.approx(79.0182 / (8 * math.pi**2) - 1)
-    assert "w/L ≈ 0.0047" in note["note"] and "+0.08 %" in note["note"]
+    assert "w/L ≈ 0.0047" in note["note"] and "+0.078 %" in note["note"]
 
 
 @pytest.mark.slow
