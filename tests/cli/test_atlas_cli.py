@@ -138,6 +138,25 @@ def test_atlas_json_shape(tmp_path):
     assert "2 not run" in flat and f"bead {int(k['converged'])} of 1" in flat, flat
 
 
+def test_atlas_stored_on_an_empty_database(tmp_path):
+    # before the first sweep: every planned knot gets its row, nothing runs (it said
+    # "error: default_model 'bead' is not among the models []")
+    out, db = tmp_path / "pages", tmp_path / "new.db"
+    rc, stdout, err = cli("atlas", "--max-crossings", "4", "--out", str(out), "--db", str(db),
+                          "--stored", "--json")
+    assert rc == 0, err
+    d = json.loads(stdout)
+    assert [e["name"] for e in d["knots"]] == ["3_1", "4_1"]
+    assert all(m["ground"] is None for e in d["knots"] for m in e["models"].values())
+    assert d["converged"] == {"bead": None, "tube": None}
+    assert d["sweep"]["ran"] == 0 and d["sweep"]["left"] == d["sweep"]["jobs"]
+    assert (out / "index.html").exists() and (out / "knots" / "4_1.html").exists()
+    rc, text, err = cli("atlas", "--max-crossings", "4", "--out", str(out), "--db", str(db),
+                        "--stored")
+    assert rc == 0, err
+    assert "no results stored yet" in " ".join(text.split())
+
+
 # -- the results database ------------------------------------------------------------------
 
 

@@ -279,13 +279,16 @@ def _print(d: dict, mods) -> None:
         out.print(f"families cover {r['covered']} of {r['knots']} knots with {r['label']} "
                   f"({100 * (r['fraction'] or 0):.0f} %){paper}", highlight=False)
     for g in fam["groups"]:
+        if not g["knots"]:  # nothing stored for that group yet
+            continue
         out.print(f"{g['label']}: {g['knots']} ground states ({fam['model']}, "
                   f"{fam['width']}): " + ", ".join(f"{k} {v}" for k, v in g["counts"].items())
                   + f"; as the family predicts {g['as_predicted']}, converged "
                   f"{g['converged']}", highlight=False, markup=False)
     conv = ", ".join(f"{k} {c['converged']} of {c['knots']} ({100 * d['converged'][k]:.0f} %)"
                      for k, c in d["converged_counts"].items() if c["knots"])
-    out.print(f"converged ({fam['rule']}): {conv}", highlight=False, markup=False)
+    out.print(f"converged ({fam['rule']}): {conv or 'no results stored yet'}", highlight=False,
+              markup=False)
     added = f", {sw['added']} added until converged" if sw["added"] else ""
     left = f", {sw['left']} not run" if sw["left"] else ""
     out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}"

@@ -1282,7 +1282,7 @@ def write_atlas(out_dir, knots: list[dict], *, families: dict | None = None,
     """
     ks = _knots(knots)
     names = _model_names(ks)
-    if default_model is None:
+    if default_model is None or not names:  # no model has results yet: nothing to default
         default_model = names[0] if names else None
     elif default_model not in names:
         raise ValueError(f"default_model {default_model!r} is not among the models {names}")
