@@ -59,7 +59,9 @@ class SweepProgress:
             TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
             TextColumn("jobs"), TimeElapsedColumn(), TextColumn("ETA {task.fields[eta]}"),
             TextColumn("{task.fields[last]}"), console=console, transient=True,
-            disable=disable)
+            # not drawn where stderr is not a terminal (the log lines below say the same; an
+            # undrawn live display still printed a blank line, before a one-line error too)
+            disable=disable or not console.is_terminal)
         self.log_lines = not disable and not console.is_terminal
         self.t0 = time.monotonic()
         self.task = None
