@@ -197,8 +197,16 @@ def test_db_states_and_grounds(tmp_path):
     g = json.loads(out)
     assert [(r["knot"], r["exclusion"], r["state"]) for r in g["grounds"]] == [
         ("3_1", "bead", "CB(i=2)"), ("3_1", "tube", "CB(i=2)"), ("4_1", "bead", "4C")]
-    assert [r["converged_rule"] for r in g["grounds"]] == [True, False, False]
+    # every row's verdict under "converged" (it was null there, the verdict under a per-row
+    # "converged_rule" while the top level's is the rule in words)
+    assert [r["converged"] for r in g["grounds"]] == [True, False, False]
+    assert isinstance(g["converged_rule"], str)
     assert csv.read_text().splitlines()[0].startswith("knot,exclusion,beads")
+    import csv as csvmod
+
+    with open(csv, newline="") as f:
+        table = list(csvmod.DictReader(f))
+    assert [r["converged"] for r in table] == ["true", "false", "false"]
     assert len(csv.read_text().splitlines()) == 4
     rc, out, err = cli("db", "--db", str(db), "grounds")
     assert rc == 0 and "CB(i=2)" in out

@@ -105,7 +105,12 @@ def grounds(
         rows = ground_table(store)
     for r in rows:
         r["width"] = _width(r["exclusion"], r["thickness"], r["beads"])
-        r["converged_rule"] = is_converged(r)
+        # ``converged``: the ground state's verdict by the sweeps' rule (the top-level
+        # ``converged_rule`` says it in words); the stored flag of its lowest replica (null
+        # for a sweep's replicas, which have no verdict of their own) stays as
+        # ``replica_converged``
+        r["replica_converged"] = r.pop("converged", None)
+        r["converged"] = is_converged(r)
     path = None
     if csv is not None:
         try:
@@ -136,7 +141,7 @@ def grounds(
                      if meta else "—")
         t.add_row(escape(r["knot"]), escape(width), escape(r["state"]),
                   f"{r['epsilon']:.3f}", f"{r['count']}/{r['replicas']}",
-                  "yes" if r["converged_rule"] else "no", escape(meta_text))
+                  "yes" if r["converged"] else "no", escape(meta_text))
     out.print(t)
     for ex in sorted(one):
         out.print(f"{'bead' if ex == 'bead' else 'tube'}: {one[ex]}", highlight=False,
