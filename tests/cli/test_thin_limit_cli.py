@@ -82,3 +82,15 @@ def test_thin_limit_trefoil_small(tmp_path):
     assert d["version"] and d["seed"] == 0 and d["parameters"]["beads"] >= 8
     assert (tmp_path / "o" / "thin_limit.png").stat().st_size > 1000
     assert (tmp_path / "o" / "manifest.json").exists()
+
+
+@pytest.mark.slow
+def test_thin_limit_figure_eight_points_say_how_their_shape_was_read():
+    """4_1's cage reads 'other' at d = w in the thinnest tubes and 4C at d = 0.5: a point's
+    shape and the words of its verdict must not disagree silently."""
+    rc, out, err = run("thin-limit", "4_1", "--json", timeout=1800)
+    assert rc == 0, err
+    for p in json.loads(out)["points"]:
+        assert p["run_shape"] in p["convergence"]
+        if p["run_shape"] != p["shape"]:
+            assert f"read at d = 0.5 it is {p['shape']}" in p["convergence"]

@@ -223,13 +223,20 @@ def thin_limit(knot: str, budget: str = "small", seed: int = 0, *,
                 raise KeyboardInterrupt
         route, res = min(cands, key=lambda c: c[1].best.epsilon)
         shape, label, mult = _shape(res)
+        convergence = res.convergence
+        run_shape = res.best.observables.get("shape")
+        if run_shape != shape:  # a tube thinner than CLASSIFY_D_MIN: the verdict's words
+            convergence += (f" (the run names shapes at d = w = {wl * n:.3g}, where this "
+                            f"chain reads {run_shape}; read at d = {CLASSIFY_D_MIN:g} it is "
+                            f"{shape})")
         sig = [_spread(res)]
         other = [c[1] for c in cands if c[1] is not res and _shape(c[1])[0] == shape]
         sig += [abs(o.best.epsilon - res.best.epsilon) for o in other]
         points.append({
             "w_over_L": wl, "beads": n, "w": wl * n, "epsilon_raw": res.best.epsilon,
             "shape": shape, "label": label, "multiplicity": mult,
-            "converged": bool(res.converged), "convergence": res.convergence, "route": route,
+            "converged": bool(res.converged), "convergence": convergence, "route": route,
+            "run_shape": run_shape,
             "routes": {c[0]: {"epsilon": c[1].best.epsilon, "shape": _shape(c[1])[0]}
                        for c in cands},
             "spread": max(sig),
