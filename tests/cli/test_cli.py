@@ -135,3 +135,14 @@ def test_the_command_line_starts_without_dask():
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     assert p.stdout.strip() == "[]"
+
+
+def test_every_command_takes_json():
+    # the README: "Every command takes --json"; version and warmup refused it
+    from stiffknots import __version__
+
+    rc, out, err = run("version", "--json")
+    assert rc == 0 and json.loads(out) == {"version": __version__}
+    rc, out, err = run("warmup", "--json")
+    assert rc == 0, err
+    assert json.loads(out)["cache_warm"] is True

@@ -115,6 +115,9 @@ def families(
     out.print("n = i knots: " + ", ".join(d["knots"]))
 
 
-def version() -> None:
+def version(json_: JsonOpt = False) -> None:
     """Print the package version."""
+    if json_:
+        dump({"version": __version__})
+        return
     out.print(__version__)

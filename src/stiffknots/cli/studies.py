@@ -95,8 +95,12 @@ def paper(
         dump(d)
 
 
-def warmup() -> None:
+def warmup(json_: JsonOpt = False) -> None:
     """Compile and cache the numba kernels now (make does it once after installing)."""
+    from stiffknots.studies.warmup import cache_is_cold
     from stiffknots.studies.warmup import warmup as run
 
-    run(lambda s: out.print(s, markup=False, highlight=False))
+    cold = cache_is_cold()
+    dt = run(None if json_ else (lambda s: out.print(s, markup=False, highlight=False)))
+    if json_:
+        dump({"compiled": cold, "seconds": dt, "cache_warm": not cache_is_cold()})
