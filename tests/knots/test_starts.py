@@ -54,3 +54,33 @@ def test_later_rounds_take_the_starts_the_first_did_not():
     assert starts == ["braid", "cage", "eighty", "braid", "cage", "eighty"]
     q = ClosedAnneal("5_2", moves=20_000, replicas=2, rounds=2, start="cage")
     assert [j.start for j in q.jobs(first=2)] == ["cage", "cage"]
+
+
+def test_too_few_beads_fail_before_the_eighty_search(monkeypatch):
+    # 4_1 at 20 beads: the braid closure needs 23, so no start fits and the error says so at
+    # once (the 80's search of every spec took 36 s before it)
+    import stiffknots.knots.eighty_embedding as E
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.embedding import EmbeddingError
+    from stiffknots.knots.starts import default_starts
+
+    def no_search(*a):
+        raise AssertionError("the 80 was searched")
+
+    monkeypatch.setattr(E, "_search_spec", no_search)
+    E._spec_for.cache_clear()
+    with pytest.raises(EmbeddingError, match="least number of beads that works is 23"):
+        default_starts(get_knot("4_1"), 20)
+
+
+def test_the_eighty_search_is_kept_on_disk(monkeypatch, tmp_path):
+    import stiffknots.knots.eighty_embedding as E
+
+    monkeypatch.setenv("STIFFKNOTS_CACHE", str(tmp_path))
+    E._spec_for.cache_clear()
+    spec = E._spec_for("5_2", 150, E._MAX_DIAGRAM)
+    assert spec is not None and list(tmp_path.glob("eighty-spec-*.pkl"))
+    E._spec_for.cache_clear()
+    monkeypatch.setattr(E, "_search_spec", lambda *a: None)  # a second process: no search
+    assert E._spec_for("5_2", 150, E._MAX_DIAGRAM) == spec
+    E._spec_for.cache_clear()

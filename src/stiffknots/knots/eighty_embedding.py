@@ -70,6 +70,7 @@ from __future__ import annotations
 import functools
 import itertools
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -540,6 +541,21 @@ def _curve_knot(spec: EightySpec) -> str:
 
 @functools.cache
 def _spec_for(name: str, n_beads: int, max_crossings: int) -> EightySpec | None:
+    """The search of :func:`find_eighty` (its answer, None included), kept in the disk cache
+    (:mod:`stiffknots._diskcache`) under the knot, N, the diagram limit and the sources it
+    depends on: it identifies up to ~140 curves (2–5 s a knot, 36 s for a chain too short
+    for every spec), which every process of a sweep and every `anneal` of a knot of the 80
+    family repeated."""
+    from stiffknots._diskcache import cached, source_key
+
+    here = Path(__file__).resolve().parent
+    key = source_key("eighty-spec", name, str(n_beads), str(max_crossings),
+                     files=tuple(str(here / f) for f in ("eighty_embedding.py", "identify.py",
+                                                         "embedding.py", "catalogue.py")))
+    return cached("eighty-spec", key, lambda: _search_spec(name, n_beads, max_crossings))
+
+
+def _search_spec(name: str, n_beads: int, max_crossings: int) -> EightySpec | None:
     from stiffknots.knots.identify import crossing_number_of_name, normalize_name, verify_knot
 
     want = normalize_name(name)
