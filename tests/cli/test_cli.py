@@ -146,3 +146,20 @@ def test_every_command_takes_json():
     rc, out, err = run("warmup", "--json")
     assert rc == 0, err
     assert json.loads(out)["cache_warm"] is True
+
+
+def test_knot_of_13_crossings_with_ranges_of_n_and_i():
+    # KnotInfo gives 13a_69 only 3 ≤ n ≤ 4 and 3 ≤ i ≤ 6: the bounds hold at the ends of the
+    # ranges (n ≥ 3 below; n ≤ 4, i ≤ 6 above), and the text shows no Python value
+    from stiffknots.theory.bounds import closed_bounds
+
+    rc, out, err = run("knot", "13a_69", "--json")
+    d = json.loads(out)
+    assert d["bridge_number"] is None and d["bridge_number_range"] == [3, 4]
+    assert d["braid_index_range"] == [3, 6]
+    assert d["lower_bound"] == pytest.approx(18 * math.pi**2)
+    assert d["upper_bound"] == pytest.approx(closed_bounds(4, 6).upper)
+    assert d["restricted_curvature_bounds"]["lower"] == pytest.approx(6 * math.pi)
+    rc, out, err = run("knot", "13a_69")
+    assert rc == 0 and "between 3 and 4" in out
+    assert not any(w in out for w in ("None", "True", "[-1"))

@@ -24,22 +24,43 @@ def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T
         return
     t = Table(title=f"knot {d['name']}" + (f" = {d['torus']}" if d["torus"] else ""),
               show_header=False)
+    def known(v, rng):
+        if v is not None:
+            return fmt(v)
+        return f"unknown (between {rng[0]} and {rng[1]})" if rng else "unknown"
+
     t.add_row("crossing number n_c", str(d["crossing_number"]))
-    t.add_row("bridge number n", fmt(d["bridge_number"]))
-    t.add_row("braid index i", fmt(d["braid_index"]))
-    t.add_row("braid word", str(d["braid_word"]))
-    t.add_row("alternating", fmt(d["alternating"]))
-    t.add_row("ε lower bound 2π²n² (eq. (13))", fmt(d["lower_bound"]))
-    t.add_row(f"ε upper bound ({d['upper_bound_attained_by']}) (eq. (31))",
-              fmt(d["upper_bound"]))
+    t.add_row("bridge number n", known(d["bridge_number"], d["bridge_number_range"]))
+    t.add_row("braid index i", known(d["braid_index"], d["braid_index_range"]))
+    w = d["braid_word"]
+    t.add_row("braid word", " ".join(str(g) for g in w) if w else "— (none needed)")
+    alt = d["alternating"]
+    t.add_row("alternating", "unknown" if alt is None else ("yes" if alt else "no"))
+    nr, ir = d["bridge_number_range"], d["braid_index_range"]
+    ranged = d.get("bounds_from_ranges")
+    t.add_row("ε lower bound 2π²n² (eq. (13))", fmt(d["lower_bound"]) + (
+        f" (n ≥ {nr[0]})" if ranged and d["lower_bound"] is not None else ""))
+    by = d["upper_bound_attained_by"]
+    t.add_row("ε upper bound" + (f" ({by})" if by else "") + " (eq. (31))",
+              fmt(d["upper_bound"]) + (f" (n ≤ {min(nr[1], ir[1])}, i ≤ {ir[1]})"
+                                       if ranged and d["upper_bound"] is not None else ""))
     g = d["predicted_ground_state"]
-    t.add_row("ground state", f"circular braid, multiplicity {g['multiplicity']}, "
-              f"ε* = {g['epsilon']:.4f}" if g else "not fixed by the bounds (n < i)")
+    if g:
+        ground = (f"circular braid, multiplicity {g['multiplicity']}, "
+                  f"ε* = {g['epsilon']:.4f}")
+    elif d["bridge_number"] is None or d["braid_index"] is None:
+        ground = "not fixed: n and i are not both known"
+    else:
+        ground = "not fixed by the bounds (n < i)"
+    t.add_row("ground state", ground)
     if "open_tension_bounds" in d:
         ob = d["open_tension_bounds"]
         t.add_row("open knot μ*L_e²/C (eq. (45))", f"[{fmt(ob['lower'])}, {fmt(ob['upper'])}]")
     rc = d["restricted_curvature_bounds"]
-    t.add_row("restricted curvature L†/R (§IX D)", f"[{fmt(rc['lower'])}, {fmt(rc['upper'])}]")
+    t.add_row("restricted curvature L†/R (§IX D)",
+              (f"[{fmt(rc['lower'])}, {fmt(rc['upper'])}]" if rc["upper"] is not None
+               else f"≥ {fmt(rc['lower'])}") if rc["lower"] is not None
+              else "unknown (n and i unknown)")
     out.print(t)
 
 

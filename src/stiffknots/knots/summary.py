@@ -36,11 +36,27 @@ def knot_summary(name: str) -> dict:
             if cb.exact else None
         ),
     }
+    rc = restricted_curvature_bounds(k.bridge_number, k.braid_index)
+    d["restricted_curvature_bounds"] = {"lower": rc.lower, "upper": rc.upper,
+                                        "unit": "L_dagger / R"}
+    d["bridge_number_range"] = list(k.bridge_number_range) if k.bridge_number_range else None
+    d["braid_index_range"] = list(k.braid_index_range) if k.braid_index_range else None
+    if cb.lower is None and k.bridge_number_range:
+        # n unknown but n ≥ n_lo: 2π²n² ≥ 2π²n_lo² still bounds ε* from below (eq. (13)); and
+        # with n ≤ n_hi, i ≤ i_hi the upper bound holds at (n_hi, i_hi) (eq. (31))
+        lo, hi = k.bridge_number_range
+        d["lower_bound"] = closed_bounds(lo, None).lower
+        d["bounds_from_ranges"] = True
+        if k.braid_index_range:
+            ihi = k.braid_index_range[1]
+            up = closed_bounds(min(hi, ihi), ihi)
+            d["upper_bound"], d["upper_bound_attained_by"] = up.upper, None
+            r_lo = restricted_curvature_bounds(lo, None).lower
+            r_hi = restricted_curvature_bounds(min(hi, ihi), ihi).upper
+            d["restricted_curvature_bounds"] = {"lower": r_lo, "upper": r_hi,
+                                                "unit": "L_dagger / R"}
     if k.bridge_number is not None and k.bridge_number >= 2:
         ob = open_bounds(k.bridge_number, k.braid_index)
         d["open_tension_bounds"] = {"lower": ob.lower, "upper": ob.upper,
                                     "unit": "mu* L_e^2 / C"}
-    rc = restricted_curvature_bounds(k.bridge_number, k.braid_index)
-    d["restricted_curvature_bounds"] = {"lower": rc.lower, "upper": rc.upper,
-                                        "unit": "L_dagger / R"}
     return d
