@@ -104,6 +104,10 @@ def test_paper_tiny_writes_report(tmp_path):
         assert (tmp_path / f).exists()
     html = (tmp_path / "report.html").read_text()
     assert "<table" in html and "4_1" in html
+    md = (tmp_path / "report.md").read_text()
+    # the hierarchy is a thin-limit statement (the cage at w = 0), in words, not Python values
+    assert "thin limit w/L → 0" in md and "4C 126.47" in md and "holds: yes" in md
+    assert ": True" not in md and ": False" not in md
 
 
 def test_unknown_option_is_a_usage_error_not_a_traceback():
