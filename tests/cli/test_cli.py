@@ -58,7 +58,8 @@ def test_families_json():
      ("anneal", "4_1", "--beads", "4"), ("anneal", "4_1", "--exclusion", "soft"),
      ("anneal", "nonsense_knot"), ("anneal", "8_19", "--beads", "20"),
      # found after the worker pool has started: the pool stops cleanly before the exit
-     ("anneal", "3_1", "--start", "cage")],
+     ("anneal", "3_1", "--start", "cage"),
+     ("open", "3_1", "--excess-length", "40,,80"), ("open", "3_1", "--excess-length", "40.5")],
 )
 def test_user_mistakes_exit_2_one_line(args):
     rc, out, err = run(*args)

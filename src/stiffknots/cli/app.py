@@ -107,8 +107,11 @@ def fmt(x, nd=4):
 
 def floats(text: str, what: str) -> list[float]:
     """Comma-separated finite numbers of an option (``--excess-length 40,60,80``)."""
+    items = text.replace(";", ",").split(",")
+    if len(items) > 1 and any(not v.strip() for v in items):
+        raise UserError(f"{what} has an empty value between commas: {text!r} (e.g. 40,60,80)")
     try:
-        vals = [float(v) for v in text.replace(";", ",").split(",") if v.strip()]
+        vals = [float(v) for v in items if v.strip()]
     except ValueError:
         raise UserError(f"{what} must be numbers separated by commas, got {text!r}") from None
     if not vals:

@@ -39,7 +39,8 @@ UNITS = "bond length b = 1, C = 1: force and tension in C/b², eps_e = E·L_e/C"
 def open_knot(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_1, 5_2 ...")],
     excess_length: Annotated[str | None, typer.Option(
-        "--excess-length", help="Excess length(s) L_e in bond lengths, e.g. 40,60,80 "
+        "--excess-length", help="Excess length(s) L_e, whole numbers of bond lengths (the "
+        "embedding adds whole bonds), e.g. 40,60,80 "
         "(default 80). With --ensemble force: the starting L_e (one value).")] = None,
     force: Annotated[str | None, typer.Option(
         help="Tension(s) F in C/b². Fixed extension: each is turned into the excess length it "
