@@ -168,3 +168,15 @@ def test_knot_of_13_crossings_with_ranges_of_n_and_i():
     rc, out, err = run("knot", "13a_69")
     assert rc == 0 and "between 3 and 4" in out
     assert not any(w in out for w in ("None", "True", "[-1"))
+
+
+def test_help_texts_are_reflowed_paragraphs():
+    from stiffknots.cli.app import reflow
+
+    assert reflow("One line\n    and its end.\n\n    A second\n    paragraph.") == (
+        "One line and its end.\n\nA second paragraph.")
+    rc, out, err = run("--help")
+    assert rc == 0
+    # thin-limit's docstring was wrapped at 96 columns: each of its lines ended mid-sentence
+    assert "each point annealed or continued" in " ".join(out.split())
+    assert "previous width and polished, corrected" in " ".join(out.split())

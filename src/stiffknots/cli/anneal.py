@@ -80,7 +80,8 @@ def anneal(
     relax_fraction: Annotated[float | None, typer.Option(
         help="Fraction of the moves first relaxing the embedding at low T (default: 0.4; "
              "0 = plain annealing).")] = None,
-    delta: Annotated[float, typer.Option(help="Single-bead rotation angle (rad).")] = math.pi / 100,
+    delta: Annotated[float, typer.Option(help="Single-bead rotation angle (rad).",
+                                         show_default="π/100 ≈ 0.0314")] = math.pi / 100,
     m_max: Annotated[int | None, typer.Option(
         help="Largest sub-chain of a crankshaft move (default: N/2, a whole loop).")] = None,
     checkpoint: CheckpointOpt = None,

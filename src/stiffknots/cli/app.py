@@ -64,7 +64,7 @@ OverwriteOpt = Annotated[bool, typer.Option(
     "--overwrite", help="Replace the results of an earlier run in --out.")]
 StartOpt = Annotated[str, typer.Option(
     help="Starting embedding: all (braid, cage where it exists, eighty for the 80 family; "
-         "the replicas take them in turn over the rounds), braid (closure of KnotInfo's braid "
+         "the replicas take them in turn), braid (closure of KnotInfo's braid "
          "word), cage (4-fold cage of a two-box rational knot [ab]: 4_1, 5_2, 6_1, ...) or "
          "eighty (an 8 plus a circle).")]
 CheckpointOpt = Annotated[str | None, typer.Option(
@@ -103,6 +103,18 @@ def fmt(x, nd=4):
     if isinstance(x, float):
         return f"{x:.{nd}f}"
     return str(x)
+
+
+def reflow(doc: str | None) -> str | None:
+    """A docstring as help text: its lines joined within each paragraph (rich's help keeps
+    every newline, so a docstring wrapped at 96 columns came out as ragged half-lines)."""
+    if doc is None:
+        return None
+    import inspect
+
+    paras = [" ".join(line.strip() for line in p.splitlines())
+             for p in inspect.cleandoc(doc).split("\n\n")]
+    return "\n\n".join(p for p in paras if p)
 
 
 def floats(text: str, what: str) -> list[float]:

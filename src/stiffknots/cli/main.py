@@ -19,7 +19,14 @@ from stiffknots.cli import (
     thin_limit,
     tightest,
 )
-from stiffknots.cli.app import Interrupted, app, err, release_folders, work_starts_note
+from stiffknots.cli.app import (
+    Interrupted,
+    app,
+    err,
+    reflow,
+    release_folders,
+    work_starts_note,
+)
 from stiffknots.errors import InvalidParameter, UserInputError, WorkerError
 
 # the commands, in the order `stiffknots --help` lists them
@@ -39,7 +46,9 @@ for _name, _command in (
         ("bench", studies.bench),
         ("warmup", studies.warmup),
         ("version", catalogue.version)):
-    app.command(_name)(_command)
+    app.command(_name, help=reflow(_command.__doc__))(_command)
+for _info in db.db_app.registered_commands:
+    _info.help = _info.help or reflow(_info.callback.__doc__)
 app.add_typer(db.db_app, name="db")  # the results database: states, grounds
 
 # API parameter → command-line option, where the names differ
