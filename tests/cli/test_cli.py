@@ -41,6 +41,7 @@ def test_elastica_json(tmp_path):
         assert k in d
     assert d["eps_80"] == pytest.approx((math.sqrt(d["eps_8"]) + math.sqrt(2) * math.pi) ** 2)
     assert max(d["cross_check"].values()) < 1e-9
+    assert max(d["cross_check_shooting"].values()) < 1e-12  # the ODE shot, a third method
     assert (tmp_path / "elastica.png").stat().st_size > 10_000
 
 
