@@ -50,6 +50,9 @@ def test_identify_says_the_closure_assumed(tmp_path):
     (("identify", RIDGERUNNER / "3.1.vect", "--bogus"), "No such option"),
     (("resample", RIDGERUNNER / "3.1.vect", "out.pdb"), "suffix"),
     (("resample", RIDGERUNNER / "8.18.vect", "out.xyz", "--beads", "20"), "--beads must be"),
+    # the rule of relax and anneal: a tube thinner than a bond, w/L in (0, 1/8]
+    (("resample", RIDGERUNNER / "3.1.vect", "out.xyz", "--w-over-L", "0.01"), "below 1/N"),
+    (("resample", RIDGERUNNER / "3.1.vect", "out.xyz", "--w-over-L", "0"), "--w-over-L must"),
 ])
 def test_bad_files_and_options_exit_2(tmp_path, args, what):
     rc, out, err = run(*[tmp_path / a if a in ("out.pdb", "out.xyz") else a for a in args])

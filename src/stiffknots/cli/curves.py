@@ -124,6 +124,8 @@ def resample(
     from stiffknots.problems import validate as V
 
     V.beads(beads)
+    if w_over_l is not None:  # the same rule as relax and anneal: a tube thinner than a bond
+        V.w_over_L(w_over_l, beads)
     if dest.is_dir():
         raise UserError(f"DEST {dest} is a folder; give the path of a file")
     if dest.suffix.lower() not in (".xyz", ".json", ".npz", ".obj", ".vect"):
