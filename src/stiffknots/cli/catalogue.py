@@ -128,7 +128,9 @@ def families(
     if json_:
         dump(d)
         return
-    t = Table(title=f"n = i prime knots, 3 ≤ n_c ≤ {max_crossings}")
+    t = Table(title=f"n = i prime knots, 3 ≤ n_c ≤ {max_crossings}",
+              caption="fraction: of the knots whose n and i KnotInfo gives (unknown: "
+                      "left out)" if tot["unknown"] else None)
     for col in ("n_c", "knots", "n = i", "unknown", "fraction"):
         t.add_column(col, justify="right")
     for c, row in st["by_crossing"].items():

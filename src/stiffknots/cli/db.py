@@ -121,6 +121,11 @@ def grounds(
         dump({"db": str(ctx.obj["db"]), "csv": None if path is None else str(path),
               "converged_rule": CONVERGENCE_RULE, "grounds": rows})
         return
+    if not rows:
+        out.print(f"no ground states: {ctx.obj['db']} holds no replicas yet (a sweep: "
+                  "stiffknots atlas ... --db " + str(ctx.obj["db"]) + ")", highlight=False,
+                  markup=False)
+        return
     # a model whose rows share one width is named alone in its column, the width said below
     # the table (the table then keeps to 80 columns in a pipe or a log)
     widths: dict[str, set[str]] = {}
