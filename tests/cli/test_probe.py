@@ -219,7 +219,7 @@ CASES = [
     ("resample {data}/3.1.vect {out}/r.xyz --beads abc", r"Invalid value for '--beads'",
      False),
     ("resample {data}/3.1.vect {out}/r.xyz --w-over-L nan",
-     r"--w-over-L must be a number in \[0, 1\), got nan", True),
+     r"--w-over-L must be a finite number in \(0, 0.125\], got nan", True),
     ("resample {data}/3.1.vect {out}/r.xyz --w-over-L inf", r"--w-over-L must be a number",
      False),
     ("resample {data}/3.1.vect {out}/r.xyz --w-over-L -0.01", r"--w-over-L must be a number",
