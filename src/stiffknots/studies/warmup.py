@@ -27,9 +27,13 @@ def cache_is_cold() -> bool:
 
 
 def warmup(log: Callable[[str], None] | None = None) -> float:
-    """Run a few tiny problems in this process (closed anneal, open knots at fixed extension
-    and force, the restricted-curvature search, shape analysis) so that numba compiles and
-    caches every kernel they use. Returns the seconds it took."""
+    """Run a few tiny problems in this process (closed anneal in both exclusion models, open
+    knots at fixed extension and force, the restricted-curvature search, shape analysis, the
+    resampling of a curve and its measures) so that numba compiles and caches every kernel
+    they use. Returns the seconds it took."""
+    from stiffknots.chain import Chain
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.knots.resample import resample
     from stiffknots.problems.closed import anneal
     from stiffknots.problems.open_extension import anneal_open
     from stiffknots.problems.open_force import anneal_open_force
@@ -40,7 +44,13 @@ def warmup(log: Callable[[str], None] | None = None) -> float:
     cold = cache_is_cold()
     say("compiling the numba kernels once (about a minute; later runs start at once) ..."
         if cold else "the numba kernels are compiled already; loading and checking them ...")
-    anneal("3_1", moves=2_000, replicas=1, rounds=1, workers=1)
+    res = anneal("3_1", moves=2_000, replicas=1, rounds=1, workers=1)
+    # the tube model's paths of the kernels and of the minimiser
+    anneal("3_1", moves=2_000, replicas=1, rounds=1, workers=1,
+           params=MoveParams(exclusion="tube"))
+    # a curve of the user: resampling (certified), the measures of a chain
+    c = resample(Chain(res.best.coords[::2], closed=True), 60, check=False)
+    c.epsilon(), c.writhe(), c.min_segment_distance()
     anneal_open("3_1", excess_length=20, moves=2_000, replicas=1, workers=1)
     anneal_open_force("3_1", 0.05, moves=50_000, replicas=1, workers=1)  # end moves too
     tightest("3_1", beads=40, moves=10_000, replicas=1, workers=1)
