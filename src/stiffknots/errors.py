@@ -74,6 +74,8 @@ class InvalidParameter(UserInputError):
 
     def message(self, name: str) -> str:
         tail = f" ({self.note})" if self.note else ""
+        if self.value is None:  # a parameter that is missing: "got None" says nothing
+            return f"{name} must be {self.allowed}; it was not given{tail}"
         return f"{name} must be {self.allowed}, got {self.value!r}{tail}"
 
     def for_option(self, option: str) -> str:

@@ -246,7 +246,8 @@ CASES = [
     ("relax {data}/3.1.vect --beads abc", r"Invalid value for '--beads'", False),
     ("relax {data}/3.1.vect --beads 10", r"thinner than the model .*use --beads ≥ 12", False),
     ("relax {data}/3.1.vect --exclusion soft", r"--exclusion must be one of bead, tube", True),
-    ("relax {data}/3.1.vect --exclusion tube", r"--w-over-L must be given for the tube model",
+    ("relax {data}/3.1.vect --exclusion tube",
+     r"--w-over-L must be a number in \(0, 1/8\] with the tube model .*it was not given",
      False),
     ("relax {data}/3.1.vect --w-over-L nan", r"--w-over-L must be a finite number in "
      r"\(0, 0\.125\], got nan", True),

@@ -84,7 +84,8 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
     # every parameter is checked before the curve is named and resampled (seconds of work)
     if exclusion == "tube":
         if w_over_L is None:
-            raise InvalidParameter("w_over_L", None, "given for the tube model")
+            raise InvalidParameter("w_over_L", None, "a number in (0, 1/8] with the tube model "
+                                   "(its diameter, w = (w/L)·N)")
         V.number("w_over_L", w_over_L, 0, 1 / 8, lo_open=True)
         if w_over_L * beads >= 1:
             raise InvalidParameter("w_over_L", w_over_L, f"below 1/N = {1 / beads:.3g}",
@@ -106,7 +107,8 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
     x = resample(chain, beads)
     if exclusion == "tube":
         if w_over_L is None:
-            raise InvalidParameter("w_over_L", None, "given for the tube model")
+            raise InvalidParameter("w_over_L", None, "a number in (0, 1/8] with the tube model "
+                                   "(its diameter, w = (w/L)·N)")
         w = V.w_over_L(w_over_L, beads) * beads
         params = MoveParams(exclusion="tube", w=w)
         have, need = x.min_segment_distance(), w
