@@ -10,13 +10,15 @@ from __future__ import annotations
 
 import importlib
 
-from stiffknots.studies.warmup import _MARKERS, cache_is_cold, warmup
+from stiffknots.studies.warmup import _MARKERS, cache_is_cold
 
 
-def test_warmup_runs_every_marker_kernel_and_leaves_the_cache_warm():
+def test_warmup_runs_every_marker_kernel_and_leaves_the_cache_warm(capsys):
+    from stiffknots.cli import app
+
     was_cold = cache_is_cold()
-    said = []
-    warmup(said.append)
+    app(["warmup"], standalone_mode=False)  # the command, in this process
+    said = [ln for ln in capsys.readouterr().out.splitlines() if ln.strip()]
     for pkg, name in _MARKERS:
         mod, fn = name.split(".")
         kernel = getattr(importlib.import_module(f"stiffknots.{pkg}.{mod}"), fn)

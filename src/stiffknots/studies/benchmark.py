@@ -203,7 +203,7 @@ def run_benchmarks(budget: float = 60.0, seeds: int | None = None, workers: int 
     rates = {}
     # the compact chains take most of a small budget at N = 10⁴ (4000·N moves): fewer moves
     # below the default budget (a less compact chain; the rate is measured the same way)
-    prep = min(1.0, budget / 60.0)
+    prep = min(1.0, budget / 60.0) ** 2
     for n in sizes:
         st = compact_state("4_1", n, moves=max(400_000, int(prep * max(4_000_000, 4000 * n))))
         rates[n] = kernel_rate(st, seconds=min(2.0, budget / 30))
