@@ -94,12 +94,3 @@ def test_a_script_without_main_guard_is_told_why_its_workers_died(tmp_path):
     assert p.returncode != 0
     last = p.stderr.strip().splitlines()[-1]
     assert "WorkerError" in last and "my_study.py has no `if __name__" in last
-    guarded = tmp_path / "guarded.py"
-    guarded.write_text("import stiffknots as sk\n"
-                       "if __name__ == '__main__':\n"
-                       "    res = sk.anneal('3_1', moves=20_000, replicas=2, rounds=1)\n"
-                       "    print(res.best.knot)\n")
-    p = subprocess.run([sys.executable, str(guarded)], capture_output=True, text=True,
-                       timeout=300)
-    assert p.returncode == 0, p.stderr
-    assert p.stdout.split() == ["3_1"]
