@@ -434,3 +434,21 @@ def test_a_singular_kkt_matrix_prints_nothing(capfd):
     assert "On entry to" not in out + err
     assert r.converged and r.energy < r.energy_before
     assert r.max_bond_error < 1e-10 and r.exclusion_margin >= 0
+
+
+def test_held_diagnostics_restore_the_descriptors_with_threads():
+    # threads that factorise at once share one redirection of fds 1 and 2: none may save
+    # another's /dev/null and leave the process without its output
+    import os
+    import threading
+
+    x = np.load(DATA.parent / "polish" / "3_1_tube_singular_kkt.npy")
+    before = [os.path.realpath(f"/proc/self/fd/{fd}") for fd in (1, 2)]
+    threads = [threading.Thread(target=polish, args=(x,), kwargs={"exclusion": "tube"})
+               for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert [os.path.realpath(f"/proc/self/fd/{fd}") for fd in (1, 2)] == before
+    assert "/dev/null" not in before

@@ -112,6 +112,7 @@ import logging
 import math
 import os
 import sys
+import threading
 import time
 from dataclasses import dataclass
 
@@ -1024,6 +1025,9 @@ class _SchurInverse:
 
 
 _LIBC: list = []
+_HELD_LOCK = threading.Lock()
+_HELD: list = []  # the saved (stdout, stderr) descriptors while diagnostics are held back
+_HELD_COUNT = [0]  # threads inside _superlu_diagnostics_held
 
 
 def _libc():
@@ -1051,22 +1055,34 @@ def _superlu_diagnostics_held():
     if libc is None:  # pragma: no cover
         yield
         return
-    for f in (sys.stdout, sys.stderr):
-        with contextlib.suppress(Exception):
-            f.flush()
-    libc.fflush(None)
-    saved = (os.dup(1), os.dup(2))
-    null = os.open(os.devnull, os.O_WRONLY)
+    # the file descriptors are the process's: threads that factorise at once share one
+    # redirection (the first in saves and redirects, the last out restores), never save
+    # each other's /dev/null
+    with _HELD_LOCK:
+        if not _HELD:
+            for f in (sys.stdout, sys.stderr):
+                with contextlib.suppress(Exception):
+                    f.flush()
+            libc.fflush(None)
+            null = os.open(os.devnull, os.O_WRONLY)
+            saved = (os.dup(1), os.dup(2))
+            os.dup2(null, 1)
+            os.dup2(null, 2)
+            os.close(null)
+            _HELD.append(saved)
+        _HELD_COUNT[0] += 1
     try:
-        os.dup2(null, 1)
-        os.dup2(null, 2)
         yield
     finally:
-        libc.fflush(None)
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for fd in (*saved, null):
-            os.close(fd)
+        with _HELD_LOCK:
+            _HELD_COUNT[0] -= 1
+            if not _HELD_COUNT[0]:
+                saved = _HELD.pop()
+                libc.fflush(None)
+                os.dup2(saved[0], 1)
+                os.dup2(saved[1], 2)
+                for fd in saved:
+                    os.close(fd)
 
 
 def _splu(k):
