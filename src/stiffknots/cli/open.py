@@ -253,15 +253,13 @@ def _run(problems, follow, replicas, quiet, w_over_l=None):
 
 def finite_differences(points: list[dict]) -> list[dict]:
     """μ = −dE/dL_e between neighbouring excess lengths next to E/L_e at their geometric
-    midpoint (:meth:`stiffknots.problems.open_extension.TensionScan.finite_differences`: the
+    midpoint (:func:`stiffknots.problems.open_extension.finite_differences`: the
     paper's μ = E/L_e checked by an independent estimate, §VIII); each pair says whether its
     two ends have the same shape (otherwise the difference compares two states)."""
-    from types import SimpleNamespace
-
-    from stiffknots.problems.open_extension import TensionScan
+    from stiffknots.problems.open_extension import finite_differences as fds
 
     pts = sorted(points, key=lambda p: p["excess_length"])
-    fd = TensionScan.finite_differences(SimpleNamespace(points=pts))
+    fd = fds(pts)
     for d, a, b in zip(fd, pts[:-1], pts[1:], strict=True):
         d["ratio"] = d["mu_finite_difference"] / d["mu_E_over_L"]
         d["same_shape"] = a["shape"] == b["shape"]

@@ -220,23 +220,28 @@ class TensionScan:
         return float((x @ y) / (x @ x))
 
     def finite_differences(self) -> list[dict]:
-        """μ = −dE/dL_e between neighbouring excess lengths, next to E/L_e at the midpoint
-        (the paper's relation μ = E/L_e, checked by an independent estimate)."""
-        pts = sorted(self.points, key=lambda p: p["excess_length"])
-        out = []
-        for a, b in zip(pts, pts[1:], strict=False):
-            la, lb = a["excess_length"], b["excess_length"]
-            mu_fd = -(b["energy"] - a["energy"]) / (lb - la)
-            mid = float(np.sqrt(la * lb))
-            # E/L_e at the geometric midpoint, with E ∝ 1/L_e interpolated
-            mu_rel = float(np.sqrt(a["tension"] * b["tension"]))
-            out.append({"L_e": mid, "mu_finite_difference": mu_fd, "mu_E_over_L": mu_rel})
-        return out
+        """:func:`finite_differences` of the scan's points."""
+        return finite_differences(self.points)
 
     def to_dict(self) -> dict:
         return {"knot": self.knot, "n": self.n, "i": self.i, "points": self.points,
                 "fit_eps_e": self.fit_eps_e, "finite_differences": self.finite_differences(),
                 "bounds": self.bounds, "version": self.version}
+
+
+def finite_differences(points: list[dict]) -> list[dict]:
+    """μ = −dE/dL_e between neighbouring excess lengths, next to E/L_e at the midpoint
+    (the paper's relation μ = E/L_e, checked by an independent estimate, §VIII)."""
+    pts = sorted(points, key=lambda p: p["excess_length"])
+    out = []
+    for a, b in zip(pts, pts[1:], strict=False):
+        la, lb = a["excess_length"], b["excess_length"]
+        mu_fd = -(b["energy"] - a["energy"]) / (lb - la)
+        mid = float(np.sqrt(la * lb))
+        # E/L_e at the geometric midpoint, with E ∝ 1/L_e interpolated
+        mu_rel = float(np.sqrt(a["tension"] * b["tension"]))
+        out.append({"L_e": mid, "mu_finite_difference": mu_fd, "mu_E_over_L": mu_rel})
+    return out
 
 
 def scan_point(res: OpenResult, seed: int) -> dict:
