@@ -161,3 +161,38 @@ def test_crankshaft_length_laws(m_max):
 def test_bad_length_law_is_named():
     with pytest.raises(ValueError, match="m_law"):
         ChainState(chain("3_1"), MoveParams(m_law="cubic"))
+
+
+def _run_moves_with_cells(state, cell, moves, temperature, seed):
+    """``moves`` crankshaft moves of the general kernel on a copy of ``state``'s chain, its
+    cell list built with cells of side ``cell``: (chain, counters)."""
+    pos = state.pos.copy()
+    ipar, fpar = state.ipar.copy(), state.fpar.copy()
+    fpar[K.F_CELL] = cell
+    head, nxt = np.empty_like(state.head), np.empty_like(state.nxt)
+    prv, bucket = np.empty_like(state.prv), np.empty_like(state.bucket)
+    K.cell_build(pos, cell, head, nxt, prv, bucket)
+    cnt = np.zeros(K.C_NCNT, dtype=np.int64)
+    K.run_moves(pos, moves, temperature, ipar, fpar, head, nxt, prv, bucket,
+                np.empty_like(state.newpos), cnt, K.new_rng_state(seed))
+    return pos, cnt
+
+
+@pytest.mark.parametrize("cell", ["default", 0.4])
+@pytest.mark.parametrize("exclusion", ["bead", "tube"])
+def test_crankshaft_scan_meets_every_segment(exclusion, cell):
+    # the crankshaft's guard scans only the cells of a box about each moved bead (kernel
+    # docstring, Cell list); with cells far larger than the chain every segment lies in the
+    # cells scanned — a brute-force scan. The decisions, hence the chains and the counters,
+    # must be the same, with the default cells and with small ones (whose scan is the box
+    # alone); and the guard must have refused moves for the comparison to test it.
+    params = MoveParams(exclusion=exclusion, p_single=0.0, l_cap=1.0, phi_max=1.5)
+    st = ChainState(chain("5_2"), params, seed=3)
+    st.run(300_000, 1e-4)  # a compact chain: many pairs of strands in contact
+    side = st.fpar[K.F_CELL] if cell == "default" else cell
+    fast, c_fast = _run_moves_with_cells(st, side, 150_000, 1e-3, seed=11)
+    brute, c_brute = _run_moves_with_cells(st, 1e4, 150_000, 1e-3, seed=11)
+    refused = c_fast[K.C_ENERGY_OK + 1] - c_fast[K.C_ACCEPTED + 1]
+    assert refused > 2_000, refused
+    assert np.array_equal(c_fast, c_brute)
+    assert np.array_equal(fast, brute)

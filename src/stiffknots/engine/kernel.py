@@ -47,7 +47,12 @@ contiguous in memory). A fixed segment within distance D of a moved segment has 
 within 1 + D of the moved segment's midpoint, hence within 1.5 + D of its moved end bead, so
 scanning the cells around each moved bead finds every candidate; the bead rule is checked from
 the same scan (a bead within d of a point has the midpoint of the segment it starts within
-d + 1/2). The cost per move is independent of N.
+d + 1/2). A crankshaft scans, for each moved bead b at its new place p, the cells that
+overlap the bounding box of Ball(p, d + 1/2) (bead rule), Ball(A', 1 + D) (its segment
+A = (b − 1, b), new midpoint A') and, for the last moved bead, Ball(B', 1 + D) (B = (b, k)):
+every fixed segment that one of its tests could refuse on has its midpoint in one of these
+balls (radii enlarged by 1e-9), and the box is about 0.6 of the cube's cells. The cost per
+move is independent of N.
 
 A single-bead move (bead i from o to p, pivots j = i − 1 and k = i + 1) tests a fixed segment
 v ∉ {j, i} only through three tests, and each can refuse the move only if v's midpoint lies in
@@ -631,9 +636,6 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
         # ---- exclusion and strand-passage guard ----------------------------------------
         lmove = phi * rho  # largest displacement of any moved point
         dseg = w if w > lmove else lmove
-        reach = 1.5 + dseg
-        if mode == 0 and fpar[F_D] + 0.5 > reach:
-            reach = fpar[F_D] + 0.5
         ok = True
         if is_open:
             # the closure rays beyond the clamped ends: moved beads stay inside the slab
@@ -668,9 +670,17 @@ def _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, n
             bmy = 0.5 * (py + ky)
             bmz = 0.5 * (pz + kz)
             sa = b - 1 if b > 0 else n - 1  # index of segment A
-            # cells overlapping the cube [p - reach, p + reach] (three per axis when the
-            # cell side is ≈ reach, as by default), exact in every case
-            x0, x1, y0, y1, z0, z1 = _cell_range(px, py, pz, reach, inv)
+            # cells overlapping the bounding box of the balls that hold every fixed
+            # segment a test below could refuse on (module docstring, Cell list): about
+            # 0.6 of the cells of the cube of half-side max(1.5 + dseg, d + 1/2) about p
+            # that the loop used to scan; for a bead that is not the last, B's ball is
+            # A's (k ↦ the previous bead)
+            if last:
+                x0, x1, y0, y1, z0, z1 = _single_box(ppx, ppy, ppz, px, py, pz, kx, ky, kz,
+                                                     dseg, d, mode, inv)
+            else:
+                x0, x1, y0, y1, z0, z1 = _single_box(ppx, ppy, ppz, px, py, pz,
+                                                     ppx, ppy, ppz, dseg, d, mode, inv)
             for cx in range(x0, x1 + 1):
                 if not ok:
                     break
