@@ -123,9 +123,19 @@ class MoveParams:
 
     @property
     def cell(self) -> float:
-        """Cell side: the reach of the single-bead move's checks (see kernel docstring)."""
+        """Cell side of the kernels' spatial hash: twice the reach of the single-bead move's
+        checks (kernel docstring, Cell list).
+
+        Any side gives the same decisions (every scan covers the cells that overlap the balls
+        its tests need; tested against a brute-force scan), so it is chosen for speed alone:
+        a crankshaft scans a box about every moved bead, and cells of twice the reach (3.06
+        bond lengths for the bead rule, 4.41 for the tube w = 1/√2) visit fewer cells per
+        bead than cells of the reach itself. Measured (mixed moves, N = 150, annealed 3_1
+        and 7_4 at T = 1e-2 and 1e-4): bead rule 1.13–1.75× the moves per second of cells of
+        the reach, tube 1.15–1.47×; sides from 3 to 4 bond lengths were the fastest, 6 was
+        slower again (bench/RESULTS.md, 2026-12-03)."""
         wt = self.w if self.exclusion == "tube" else 0.0
-        return max(1.5 + max(wt, self.delta), self.d + 0.5)
+        return 2.0 * max(1.5 + max(wt, self.delta), self.d + 0.5)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         ip = np.zeros(K.I_NIPAR, dtype=np.int64)
