@@ -50,6 +50,27 @@ def test_verdict_counts_the_lowest_state_only():
     assert verdict(rule, []) == (False, "no replica finished")
 
 
+def test_no_verdict_before_every_default_start_had_a_search():
+    # braid and cage agreeing is no verdict while the 80 — a hypothesis for the ground state
+    # of its own (§VII) — has not been tried: on 4_1 it holds the lower states
+    rule = _Rule()
+    rule.starts, rule.adaptive_starts = ["braid", "cage", "eighty"], True
+    a, b = _r("4C", 128.384), _r("4C", 128.39)
+    a.start, b.start = "braid", "cage"
+    ok, why = verdict(rule, [a, b])
+    assert not ok and "2 of 2" in why and "no search has started from the eighty" in why
+    c = _r("other", 127.43)
+    c.start = "eighty"
+    ok, why = verdict(rule, [a, b, c])
+    assert not ok and "1 of 3" in why  # the 80 found a lower state, reached once
+    d = _r("4C", 129.2)
+    d.start = "eighty"
+    ok, why = verdict(rule, [a, b, d])
+    assert ok and "2 of 3" in why  # tried, and nothing lower: the verdict stands
+    rule.adaptive_starts = False  # starts the user chose: only those are asked for
+    assert verdict(rule, [a, b])[0]
+
+
 def test_a_search_counts_once_however_many_legs_reach_its_state():
     rule = _Rule()
     a = _r("other", 172.66)

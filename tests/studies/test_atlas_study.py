@@ -16,6 +16,7 @@ from stiffknots.knots.families import (
     families_of,
     predicted_shape,
 )
+from stiffknots.knots.starts import default_start_names
 from stiffknots.store import Store
 from stiffknots.studies.atlas import (
     atlas_input,
@@ -45,11 +46,12 @@ def store(tmp_path):
     bead, tube = parse_models("bead,tube")
     st = Store(tmp_path / "s.db")
     for knot, reps in ROWS.items():
+        starts = default_start_names(knot, 150)  # round-robin, as a sweep assigns them
         for r, (eps, shape, mult) in enumerate(reps):
             st.put({"knot": knot, "exclusion": "bead", "beads": 150, "thickness": D,
                     "seed": 0, "replica": r, "settings": sweep_settings(bead, BUDGETS["small"]),
                     "epsilon": eps, "min_segment_distance": 0.6, "wall_seconds": 1.0,
-                    "shape": shape, "multiplicity": mult, "start": "braid"},
+                    "shape": shape, "multiplicity": mult, "start": starts[r % len(starts)]},
                    np.arange(450.0).reshape(150, 3) + r)
     # a replica of another budget: another ensemble, never mixed in
     st.put({"knot": "5_2", "exclusion": "bead", "beads": 150, "thickness": D, "seed": 0,
@@ -184,3 +186,31 @@ def test_eps_n2_points_skip_missing():
                          {"name": "c", "n": 3, "i": 3, "epsilon": None, "class": None}])
     assert pts == {"2": [{"knot": "a", "n": 2, "i": 2, "epsilon": 80.0, "shape": "CB(i)"}],
                    "3": [], "4": []}
+
+
+def test_a_sweep_ensemble_converges_only_after_every_default_start(tmp_path):
+    # braid and cage agreeing on 4_1's cage is no verdict while its 80 has not been tried
+    # (the solver's rule, problems.base.verdict); the stored table and the page say so too
+    from stiffknots.store import ground_table
+    from stiffknots.sweeps import ensemble_converged
+    from stiffknots.sweeps.convergence import untried_starts
+
+    bead, _ = parse_models("bead,tube")
+    with Store(tmp_path / "s.db") as st:
+        def put(r, eps, shape, start):
+            st.put({"knot": "4_1", "exclusion": "bead", "beads": 150, "thickness": D,
+                    "seed": 0, "replica": r, "settings": sweep_settings(bead, BUDGETS["small"]),
+                    "epsilon": eps, "min_segment_distance": 0.6, "wall_seconds": 1.0,
+                    "shape": shape, "start": start}, np.arange(450.0).reshape(150, 3) + r)
+
+        put(0, 128.384, "4C", "braid")
+        put(1, 128.39, "4C", "cage")
+        states = st.states("4_1")
+        assert untried_starts(states) == ["eighty"]
+        assert not ensemble_converged(states)
+        row = ground_table(st)[0]
+        assert row["starts_tried"] == ["braid", "cage"] and not ensemble_converged(row)
+        put(2, 129.2, "other", "eighty")  # tried, and nothing lower: converged
+        assert ensemble_converged(st.states("4_1")) and ensemble_converged(ground_table(st)[0])
+        # the starts asked for can be given (none: the ground state's rule alone)
+        assert ensemble_converged(states, starts=())

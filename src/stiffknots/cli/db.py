@@ -5,7 +5,7 @@ metastable states, per ensemble (model, width, N, settings);
 ``stiffknots db [--db PATH] grounds [--csv FILE] [--json]`` — every ground state, one row per
 knot × model × N × width.
 
-A state is converged by the sweeps' rule (:func:`stiffknots.sweeps.is_converged`).
+An ensemble is converged by the sweeps' rule (:func:`stiffknots.sweeps.ensemble_converged`).
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def states(
     """A knot's ground and metastable states, per model, width, N and settings."""
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.store import describe_knot
-    from stiffknots.sweeps import CONVERGENCE_RULE, MODELS, is_converged
+    from stiffknots.sweeps import CONVERGENCE_RULE, MODELS, ensemble_converged
 
     if model is not None and model not in MODELS:
         raise UserError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
@@ -66,7 +66,7 @@ def states(
         d = describe_knot(store, name, exclusion=model)
     for e in d["ensembles"]:
         e["width"] = _width(e["exclusion"], e["thickness"], e["beads"])
-        e["converged"] = is_converged(e["ground"])
+        e["converged"] = ensemble_converged(e)
     d["converged_rule"] = CONVERGENCE_RULE
     if json_:
         dump(d)
@@ -97,7 +97,7 @@ def grounds(
 ) -> None:
     """Every ground state: one row per knot × model × N × width (the lowest-ε settings)."""
     from stiffknots.store import ground_table, to_csv
-    from stiffknots.sweeps import CONVERGENCE_RULE, is_converged
+    from stiffknots.sweeps import CONVERGENCE_RULE, ensemble_converged
 
     if csv is not None and csv.is_dir():
         raise UserError(f"--csv {csv} is a folder; give the path of a file")
@@ -110,7 +110,7 @@ def grounds(
         # for a sweep's replicas, which have no verdict of their own) stays as
         # ``replica_converged``
         r["replica_converged"] = r.pop("converged", None)
-        r["converged"] = is_converged(r)
+        r["converged"] = ensemble_converged(r)
     path = None
     if csv is not None:
         try:

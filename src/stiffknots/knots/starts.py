@@ -118,6 +118,28 @@ def default_starts(knot, n_beads: int = 150) -> list[str]:
     return found
 
 
+@functools.lru_cache(maxsize=4096)
+def default_start_names(name: str, n_beads: int = 150) -> tuple[str, ...]:
+    """The names of :func:`default_starts` of the knot ``name`` at ``n_beads`` beads, for the
+    verdicts on stored results (which need the names only): braid and cage are built (a few
+    milliseconds), the 80 is decided by its spec search, kept in the disk cache, whose spec
+    is found only when its chain was built and verified — building every knot's 80 again
+    took 21 s for the 249 knots. () when no start fits."""
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.eighty_embedding import _MAX_DIAGRAM, _spec_for
+    from stiffknots.knots.families import EIGHTY_FAMILY
+
+    knot = get_knot(name)
+    found = available_starts(knot, n_beads, ALL_STARTS)
+    if not found:
+        return ()
+    two_bridge = knot.bridge_number_range is None or knot.bridge_number_range[0] <= 2
+    if (knot.name in EIGHTY_FAMILY and not knot.n_equals_i and two_bridge
+            and _spec_for(knot.name, int(n_beads), _MAX_DIAGRAM) is not None):
+        found.append("eighty")
+    return tuple(found)
+
+
 def split_replicas(starts: list[str], replicas: int) -> list[str]:
     """Assign ``replicas`` replicas to ``starts`` round-robin (replica r gets start r mod k)."""
     if not starts:

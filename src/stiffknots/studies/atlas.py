@@ -24,7 +24,8 @@ n = i → CB(i) (proven), the two-box rational knots [ab] → 4-fold cage, the 8
   knots whose ground state contradicts it, and the knots in no family with their shapes;
 * ε against n² for n = 2, 3, 4 (:func:`stiffknots.report.figures.plot_eps_vs_n2`).
 
-Convergence of a ground state follows :func:`stiffknots.sweeps.is_converged`.
+Convergence of an ensemble follows :func:`stiffknots.sweeps.ensemble_converged` (the ground
+state's rule, after a replica from every default start).
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from stiffknots.sweeps import (
     Model,
     SweepListener,
     SweepResult,
-    is_converged,
+    ensemble_converged,
     run_sweep,
     sweep_settings,
 )
@@ -107,7 +108,7 @@ def _model_json(m: Model, st: Mapping | None) -> dict:
     if st is None:
         return {"width": width, "replicas": 0, "ground": None, "metastable": [],
                 "converged": False, "settings_hash": None}
-    conv = is_converged(st["ground"])
+    conv = ensemble_converged(st)
     return {"width": width, "replicas": st["replicas"], "settings_hash": st["settings_hash"],
             "converged": conv, "ground": _state_json(st["ground"], conv),
             "metastable": [_state_json(s, None) for s in st["metastable"]]}
@@ -139,7 +140,7 @@ def atlas_input(store: Store, rec: Mapping) -> dict:
         if st is None:
             continue
         radius = m.thickness / 2 if m.name == "tube" else None
-        conv = is_converged(st["ground"])
+        conv = ensemble_converged(st)
 
         def state(s: Mapping, converged: bool | None, radius=radius) -> dict:
             return {"shape": s["shape"], "multiplicity": s["multiplicity"],

@@ -18,13 +18,14 @@ Public API
     bead / tube at a width and N (:mod:`stiffknots.sweeps.models`).
 :func:`resolve_knots`, :func:`plan_sweep`, :func:`pending`, :func:`sweep_settings`
     The jobs and their keys (:mod:`stiffknots.sweeps.plan`).
-:func:`is_converged`
-    The convergence rule of a ground state (:mod:`stiffknots.sweeps.convergence`).
+:func:`is_converged`, :func:`ensemble_converged`
+    The convergence rule of a ground state, and of a stored ensemble (the rule, after a
+    replica from every default start) (:mod:`stiffknots.sweeps.convergence`).
 """
 
 from stiffknots.sweeps.budgets import BUDGETS, Budget, budget_of
 from stiffknots.sweeps.convergence import RULE as CONVERGENCE_RULE
-from stiffknots.sweeps.convergence import is_converged
+from stiffknots.sweeps.convergence import ensemble_converged, is_converged
 from stiffknots.sweeps.models import MODELS, Model, parse_models
 from stiffknots.sweeps.plan import (
     SweepJob,
@@ -35,6 +36,7 @@ from stiffknots.sweeps.plan import (
 )
 from stiffknots.sweeps.run import SweepListener, SweepResult, run_sweep, store_replica
 
-__all__ = ["BUDGETS", "Budget", "budget_of", "CONVERGENCE_RULE", "is_converged", "MODELS",
+__all__ = ["BUDGETS", "Budget", "budget_of", "CONVERGENCE_RULE", "ensemble_converged",
+           "is_converged", "MODELS",
            "Model", "parse_models", "SweepJob", "pending", "plan_sweep", "resolve_knots",
            "sweep_settings", "SweepListener", "SweepResult", "run_sweep", "store_replica"]

@@ -18,10 +18,11 @@ at one minimum and a fifth 0.13 % above were "not converged" (5_1, bead rule), a
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
-__all__ = ["MIN_REPLICAS", "REL_TOL", "RULE", "hits", "is_converged"]
+__all__ = ["MIN_REPLICAS", "REL_TOL", "RULE", "ensemble_converged", "hits", "is_converged",
+           "untried_starts"]
 
 #: Replicas that must reach the ground state.
 MIN_REPLICAS = 2
@@ -29,7 +30,7 @@ MIN_REPLICAS = 2
 REL_TOL = 1e-3
 #: The rule in words (for reports).
 RULE = (f"ground state reached by ≥ {MIN_REPLICAS} replicas (same shape) with ε within "
-        f"{REL_TOL:.1%} of the lowest")
+        f"{REL_TOL:.1%} of the lowest, after a replica from every default start")
 
 
 def hits(ground: Mapping[str, Any] | None) -> int:
@@ -56,3 +57,38 @@ def is_converged(ground: Mapping[str, Any] | None) -> bool:
     """Whether a ground state (a state of :meth:`Store.states`: ``epsilon`` — the lowest ε —
     and ``eps_all``) satisfies the rule of the module docstring."""
     return hits(ground) >= MIN_REPLICAS
+
+
+def untried_starts(states: Mapping[str, Any], starts: Sequence[str] | None = None) -> list[str]:
+    """The starts from which no stored replica of an ensemble started: ``states`` is a
+    :meth:`Store.states` dict (every state's ``starts`` counts) or a row of
+    :meth:`Store.ground_states` (its ``starts_tried``); ``starts`` the starts asked for —
+    by default the knot's default starts where the ensemble is a sweep's (its settings'
+    ``start`` policy is :data:`~stiffknots.sweeps.plan.START_POLICY`), none otherwise."""
+    if "starts_tried" in states:
+        tried = set(states.get("starts_tried") or ())
+    else:
+        tried = set()
+        for st in [states.get("ground"), *(states.get("metastable") or [])]:
+            if st:
+                tried.update((st.get("starts") or {}).keys())
+    if starts is None:
+        from stiffknots.knots.starts import default_start_names
+        from stiffknots.sweeps.plan import START_POLICY
+
+        policy = (states.get("settings") or {}).get("start")
+        starts = (default_start_names(states["knot"], int(states["beads"]))
+                  if policy == START_POLICY else ())
+    return [s for s in dict.fromkeys(starts) if s not in tried]
+
+
+def ensemble_converged(states: Mapping[str, Any], starts: Sequence[str] | None = None) -> bool:
+    """The verdict on a whole ensemble (a :meth:`Store.states` dict or a
+    :meth:`Store.ground_states` row): its ground state satisfies the rule
+    (:func:`is_converged`) and every start asked for (:func:`untried_starts`: a sweep's
+    ensemble asks for the knot's default starts, the shapes §VII conjectures for it) has had
+    a replica — the solver's rule too (:func:`stiffknots.problems.base.verdict`): on 4_1
+    braid and cage agree at the cage's 128.384 while every search from the 80 ends lower
+    (bench/RESULTS.md, 2026-12-03)."""
+    ground = states.get("ground") if "ground" in states else states
+    return is_converged(ground) and not untried_starts(states, starts)

@@ -48,7 +48,7 @@ from stiffknots.sweeps.cluster import (
     run_task,
     scheduler_address,
 )
-from stiffknots.sweeps.convergence import is_converged
+from stiffknots.sweeps.convergence import ensemble_converged as converged_with_every_start
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import (
     SweepJob,
@@ -180,13 +180,15 @@ def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | No
 
 
 def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str) -> bool:
-    """Whether the stored ground state of one (knot, model) ensemble is converged
-    (:func:`~stiffknots.sweeps.convergence.is_converged`); False when nothing is stored."""
+    """Whether one stored (knot, model) ensemble is converged — its ground state by the rule,
+    after a replica from every default start
+    (:func:`~stiffknots.sweeps.convergence.ensemble_converged`); False when nothing is
+    stored."""
     if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
                        thickness=model.thickness, settings_hash=settings_hash):
         return False
     st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash)
-    return is_converged(st["ground"])
+    return converged_with_every_start(st)
 
 
 def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) -> float:
@@ -230,9 +232,9 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
     workers : int, optional
         Worker processes of the local cluster (default: one per core).
     max_replicas : int, optional
-        Replicas are added, ``step`` at a time, to every (knot, model) whose ground state has
-        not converged once its replicas have ended
-        (:func:`~stiffknots.sweeps.convergence.is_converged`), up to ``max_replicas`` in all.
+        Replicas are added, ``step`` at a time, to every (knot, model) not converged once its
+        replicas have ended (:func:`ensemble_converged`: the ground state's rule, and a
+        replica from every default start), up to ``max_replicas`` in all.
         Default: the budget's ``max_replicas`` (its replicas when None: nothing added). The
         added replicas have the budget's moves and settings: they join the same ensemble, and
         a resumed sweep skips them too.
