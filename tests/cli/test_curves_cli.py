@@ -71,3 +71,15 @@ def test_resample_command(tmp_path):
 
     c = load(dest)
     assert c.n_beads == 100 and np.allclose(c.bond_lengths(), 1.0, atol=1e-12)
+
+
+def test_relax_refuses_a_results_folder_before_any_work(tmp_path):
+    # --out holding another run's results is refused before the curve is identified and the
+    # problem built (it took 4.7 s): with a knot name that the problem would refuse, the
+    # folder's error comes first
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "manifest.json").write_text("{}")
+    rc, _, err = run("relax", RIDGERUNNER / "3.1.vect", "--knot", "4_1", "--out", out)
+    assert rc == 2 and "holds the results of another run" in err, err
+    assert (out / "manifest.json").read_text() == "{}"

@@ -199,9 +199,11 @@ def relax(
         exclusion = "tube"
     chain = _load(file, closed)
     prepare_folder(out_dir, "--out")  # writable (created now, removed if the command fails)
+    # claimed before the problem is built (identifying the curve takes seconds), as anneal
+    # does: a folder holding another run's results is refused at once
+    out_path = prepare_out(out_dir, overwrite)
     problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
                     w_over_L=w_over_l, knot=knot, polish=polish)
-    out_path = prepare_out(out_dir, overwrite)
     with ReplicaProgress(f"relax {problem.knot_name}", replicas, disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     check_interrupted(res)
