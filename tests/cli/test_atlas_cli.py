@@ -210,6 +210,9 @@ def test_db_states_and_grounds(tmp_path):
     assert len(csv.read_text().splitlines()) == 4
     rc, out, err = cli("db", "--db", str(db), "grounds")
     assert rc == 0 and "CB(i=2)" in out
+    # 4_1's bead ensemble has had no replica from its cage or its 80: not converged, and why
+    assert g["grounds"][2]["untried_starts"] == ["cage", "eighty"]
+    assert "no*: a default start not tried yet — 4_1 bead: cage, eighty" in out
     # one width per model: named once below the table, every row on one line of ≤ 80 columns
     lines = out.splitlines()
     assert "bead: bead rule d = 1/√2, N = 150 (w/L ≈ 0.0047)" in lines

@@ -98,6 +98,7 @@ def grounds(
     """Every ground state: one row per knot × model × N × width (the lowest-ε settings)."""
     from stiffknots.store import ground_table, to_csv
     from stiffknots.sweeps import CONVERGENCE_RULE, ensemble_converged
+    from stiffknots.sweeps.convergence import untried_starts
 
     if csv is not None and csv.is_dir():
         raise UserError(f"--csv {csv} is a folder; give the path of a file")
@@ -111,6 +112,7 @@ def grounds(
         # ``replica_converged``
         r["replica_converged"] = r.pop("converged", None)
         r["converged"] = ensemble_converged(r)
+        r["untried_starts"] = untried_starts(r)
     path = None
     if csv is not None:
         try:
@@ -146,11 +148,17 @@ def grounds(
                      if meta else "—")
         t.add_row(escape(r["knot"]), escape(width), escape(r["state"]),
                   f"{r['epsilon']:.3f}", f"{r['count']}/{r['replicas']}",
-                  "yes" if r["converged"] else "no", escape(meta_text))
+                  "yes" if r["converged"] else "no" + ("*" if r["untried_starts"] else ""),
+                  escape(meta_text))
     out.print(t)
     for ex in sorted(one):
         out.print(f"{'bead' if ex == 'bead' else 'tube'}: {one[ex]}", highlight=False,
                   markup=False)
     out.print(f"converged: {CONVERGENCE_RULE}", highlight=False, markup=False)
+    untried = [f"{r['knot']} {r['exclusion']}: {', '.join(r['untried_starts'])}"
+               for r in rows if r["untried_starts"]]
+    if untried:
+        out.print("no*: a default start not tried yet — " + "; ".join(untried),
+                  highlight=False, markup=False)
     if path is not None:
         out.print(f"CSV: {path}", highlight=False, markup=False)

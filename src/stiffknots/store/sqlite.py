@@ -604,7 +604,8 @@ class Store:
             ``n_states``, ``metastable`` (``"80 147.30 ×3; CB(i=3) 181.20 ×1"``), ``id``,
             ``seed``, ``replica``, ``start``, ``min_segment_distance``, ``converged``,
             ``knot_verified``, ``settings_hash``, ``n_settings``, ``problem``, ``version``,
-            ``settings`` and ``starts_tried`` (the starts of the ensemble's replicas).
+            ``start_policy`` (the settings' ``start``) and ``starts_tried`` (the starts of
+            the ensemble's replicas).
         """
         rows = self.replicas(knot=knot, exclusion=exclusion, beads=beads, thickness=thickness,
                              problem=problem, settings_hash=settings_hash)
@@ -635,7 +636,7 @@ class Store:
                 "converged": gs["converged"], "knot_verified": gs["knot_verified"],
                 "settings_hash": best["settings_hash"], "n_settings": len(groups),
                 "problem": best["problem"], "version": version,
-                "settings": best["settings"],
+                "start_policy": (best["settings"] or {}).get("start"),
                 "starts_tried": sorted({k for st in [gs, *best["metastable"]]
                                         for k in (st.get("starts") or {})}),
             })

@@ -62,7 +62,8 @@ def is_converged(ground: Mapping[str, Any] | None) -> bool:
 def untried_starts(states: Mapping[str, Any], starts: Sequence[str] | None = None) -> list[str]:
     """The starts from which no stored replica of an ensemble started: ``states`` is a
     :meth:`Store.states` dict (every state's ``starts`` counts) or a row of
-    :meth:`Store.ground_states` (its ``starts_tried``); ``starts`` the starts asked for —
+    :meth:`Store.ground_states` (its ``starts_tried`` and ``start_policy``); ``starts`` the
+    starts asked for —
     by default the knot's default starts where the ensemble is a sweep's (its settings'
     ``start`` policy is :data:`~stiffknots.sweeps.plan.START_POLICY`), none otherwise."""
     if "starts_tried" in states:
@@ -76,7 +77,8 @@ def untried_starts(states: Mapping[str, Any], starts: Sequence[str] | None = Non
         from stiffknots.knots.starts import default_start_names
         from stiffknots.sweeps.plan import START_POLICY
 
-        policy = (states.get("settings") or {}).get("start")
+        policy = (states["start_policy"] if "start_policy" in states
+                  else (states.get("settings") or {}).get("start"))
         starts = (default_start_names(states["knot"], int(states["beads"]))
                   if policy == START_POLICY else ())
     return [s for s in dict.fromkeys(starts) if s not in tried]
