@@ -214,3 +214,27 @@ def test_a_sweep_ensemble_converges_only_after_every_default_start(tmp_path):
         assert ensemble_converged(st.states("4_1")) and ensemble_converged(ground_table(st)[0])
         # the starts asked for can be given (none: the ground state's rule alone)
         assert ensemble_converged(states, starts=())
+
+
+def test_a_bead_ground_above_the_tube_ground_is_flagged(tmp_path):
+    # a tube chain of width w = d is bead-admissible, so the bead rule's minimum lies at or
+    # below the tube's: a bead ground above it is a search that missed (10_4, 2026-12-03)
+    bead, tube = parse_models("bead,tube")
+    hashes = {m.name: _hash(m) for m in (bead, tube)}
+
+    def entry(eps_bead, eps_tube):
+        with Store(tmp_path / f"{eps_bead}-{eps_tube}.db") as st:
+            for model, eps in ((bead, eps_bead), (tube, eps_tube)):
+                for r in range(2):
+                    st.put({"knot": "3_1", "exclusion": model.exclusion, "beads": 150,
+                            "thickness": model.thickness, "seed": 0, "replica": r,
+                            "settings": sweep_settings(model, BUDGETS["small"]),
+                            "epsilon": eps + 0.01 * r, "min_segment_distance": 0.6,
+                            "wall_seconds": 1.0, "shape": "CB", "multiplicity": 2,
+                            "start": "braid"}, np.zeros((150, 3)) + r)
+            return json_entry(knot_records(st, ["3_1"], [bead, tube], hashes)[0], "bead")
+
+    flag = entry(80.5, 79.3)["bead_above_tube"]
+    assert flag["bead"] == 80.5 and flag["tube"] == 79.3
+    assert flag["missed_by"] == pytest.approx(1.2 / 79.3) and "missed" in flag["note"]
+    assert entry(79.02, 79.06)["bead_above_tube"] is None  # bead below tube: as it must be

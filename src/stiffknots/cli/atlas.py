@@ -291,6 +291,13 @@ def _print(d: dict, mods) -> None:
                      for k, c in d["converged_counts"].items() if c["knots"])
     out.print(f"converged ({fam['rule']}): {conv or 'no results stored yet'}", highlight=False,
               markup=False)
+    missed = [e for e in d["knots"] if e.get("bead_above_tube")]
+    if missed:
+        out.print("bead-rule ground above the tube's (a tube chain of the same width is "
+                  "bead-admissible, so the bead search missed): " + ", ".join(
+                      f"{e['name']} {e['bead_above_tube']['bead']:.2f} > "
+                      f"{e['bead_above_tube']['tube']:.2f}" for e in missed),
+                  highlight=False, markup=False)
     added = f", {sw['added']} added until converged" if sw["added"] else ""
     left = f", {sw['left']} not run" if sw["left"] else ""
     out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}"

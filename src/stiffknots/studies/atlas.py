@@ -50,8 +50,8 @@ from stiffknots.sweeps import (
     sweep_settings,
 )
 
-__all__ = ["DEFAULT_OUT", "DEFAULT_DB", "knot_records", "atlas_input", "json_entry",
-           "family_study", "families_table", "eps_n2_points", "run_atlas"]
+__all__ = ["DEFAULT_OUT", "DEFAULT_DB", "bead_above_tube", "knot_records", "atlas_input",
+           "json_entry", "family_study", "families_table", "eps_n2_points", "run_atlas"]
 
 #: Where the pages go by default.
 DEFAULT_OUT = Path("results") / "atlas"
@@ -114,6 +114,27 @@ def _model_json(m: Model, st: Mapping | None) -> dict:
             "metastable": [_state_json(s, None) for s in st["metastable"]]}
 
 
+def bead_above_tube(rec: Mapping) -> dict | None:
+    """A bead-rule ground state above the tube ground state of the same knot, N and
+    thickness (d = w), or None. Every tube-admissible chain is bead-admissible (beads i, j
+    with |i − j| ≥ 2 are ends of segments that share no bead, hence ≥ w apart), so the bead
+    rule's minimum is at most the tube's: a bead ground above it is a search that missed,
+    by at least the difference (measured: 10_4 at N = 150, 260.73 against 223.89)."""
+    found = {v["model"].exclusion: v for v in rec["models"].values()
+             if v["states"] is not None and v["states"]["ground"] is not None}
+    if "bead" not in found or "tube" not in found:
+        return None
+    b, t = found["bead"], found["tube"]
+    if (b["model"].beads, b["model"].thickness) != (t["model"].beads, t["model"].thickness):
+        return None
+    eb, et = b["states"]["ground"]["epsilon"], t["states"]["ground"]["epsilon"]
+    if eb <= et * (1 + 1e-9):
+        return None
+    return {"bead": eb, "tube": et, "missed_by": (eb - et) / et,
+            "note": f"bead-rule ground {eb:.2f} above the tube's {et:.2f} (a tube chain of "
+                    "this width is bead-admissible): the bead search missed"}
+
+
 def json_entry(rec: Mapping, main_model: str) -> dict:
     """The ``--json`` entry of one knot: name, n, i, crossing number, families, the ground
     state of ``main_model`` (``shape``, ``multiplicity``, ``epsilon``, ``converged``) at top
@@ -127,6 +148,7 @@ def json_entry(rec: Mapping, main_model: str) -> dict:
             "epsilon": g.get("epsilon"),
             "converged": bool(models.get(main_model, {}).get("converged", False)),
             "width": models.get(main_model, {}).get("width", {}).get("text"),
+            "bead_above_tube": bead_above_tube(rec),
             "models": models}
 
 
