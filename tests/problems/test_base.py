@@ -59,6 +59,10 @@ def test_no_verdict_before_every_default_start_had_a_search():
     a.start, b.start = "braid", "cage"
     ok, why = verdict(rule, [a, b])
     assert not ok and "2 of 2" in why and "no search has started from the eighty" in why
+    assert "3 replicas a round give every start a search" not in why  # _Rule sets none
+    rule.replicas = 2
+    assert "3 replicas a round give every start a search in the first" in verdict(rule,
+                                                                                 [a, b])[1]
     c = _r("other", 127.43)
     c.start = "eighty"
     ok, why = verdict(rule, [a, b, c])

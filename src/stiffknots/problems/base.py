@@ -559,9 +559,12 @@ def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
           if len(bests) < len(replicas) else f"{len(replicas)} replicas")
     untried = untried_starts(problem, replicas)
     if hits >= problem.agree and untried:
+        k = len(dict.fromkeys(problem.starts))
+        hint = (f" ({k} replicas a round give every start a search in the first)"
+                if getattr(problem, "replicas", k) < k else "")
         return False, (f"the lowest state ({name}) was reached by {hits} of {of} "
                        f"(within {problem.rel_tol:.0e}), but no search has started from the "
-                       f"{' or '.join(untried)} embedding yet")
+                       f"{' or '.join(untried)} embedding yet{hint}")
     if hits >= problem.agree:
         return True, (f"the lowest state ({name}) was reached by {hits} of {of} "
                       f"(within {problem.rel_tol:.0e})")
