@@ -97,7 +97,7 @@ def grounds(
 ) -> None:
     """Every ground state: one row per knot × model × N × width (the lowest-ε settings)."""
     from stiffknots.store import ground_table, to_csv
-    from stiffknots.sweeps import CONVERGENCE_RULE, ensemble_converged
+    from stiffknots.sweeps import CONVERGENCE_RULE, is_converged
     from stiffknots.sweeps.convergence import untried_starts
 
     if csv is not None and csv.is_dir():
@@ -111,8 +111,9 @@ def grounds(
         # for a sweep's replicas, which have no verdict of their own) stays as
         # ``replica_converged``
         r["replica_converged"] = r.pop("converged", None)
-        r["converged"] = ensemble_converged(r)
+        # the ensemble's verdict (sweeps.ensemble_converged): the rule, every start tried
         r["untried_starts"] = untried_starts(r)
+        r["converged"] = is_converged(r) and not r["untried_starts"]
     path = None
     if csv is not None:
         try:

@@ -85,6 +85,7 @@ __all__ = [
     "eighty_specs",
     "eighty_table",
     "find_eighty",
+    "has_eighty",
     "embed_eighty",
 ]
 
@@ -607,9 +608,7 @@ def find_eighty(knot, n_beads: int = 150,
 
         knot = get_knot(knot)
     name = knot.name
-    # every member of the family is a two-bridge knot: others are refused without a search
-    two_bridge = knot.bridge_number_range is None or knot.bridge_number_range[0] <= 2
-    spec = _spec_for(name, int(n_beads), int(max_crossings)) if two_bridge else None
+    spec = _spec_of(knot, n_beads, max_crossings)
     if spec is None:
         raise EmbeddingError(
             f"{name} has no 80 start with n_beads={n_beads}: it is not in the searched 80 "
@@ -617,6 +616,20 @@ def find_eighty(knot, n_beads: int = 150,
             f"point-braid k, clasp — with j + k + 2 ≤ {max_crossings} crossings: the two-bridge "
             "knots [±k, ±j, ±2], e.g. 5_2, 6_2, 6_3, 7_5; not 7_4 or 7_7)")
     return spec, eighty_chain(spec, n_beads)
+
+
+def _spec_of(knot, n_beads: int, max_crossings: int = _MAX_DIAGRAM) -> EightySpec | None:
+    """The spec of :func:`find_eighty` for a catalogue entry, or None. Every member of the
+    family is a two-bridge knot: others are refused without a search."""
+    two_bridge = knot.bridge_number_range is None or knot.bridge_number_range[0] <= 2
+    return _spec_for(knot.name, int(n_beads), int(max_crossings)) if two_bridge else None
+
+
+def has_eighty(knot, n_beads: int = 150) -> bool:
+    """Does :func:`find_eighty` find an 80 of the catalogue entry ``knot`` at ``n_beads``
+    beads? Its spec search alone (kept in the disk cache), without building the chain: a spec
+    is found only when its chain was built and its knot type verified."""
+    return _spec_of(knot, n_beads) is not None
 
 
 def embed_eighty(knot, n_beads: int = 150) -> np.ndarray:

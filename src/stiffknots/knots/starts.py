@@ -105,17 +105,23 @@ def default_starts(knot, n_beads: int = 150) -> list[str]:
     EmbeddingError
         No start fits in ``n_beads`` beads (the braid closure's message says how many).
     """
-    from stiffknots.knots.families import EIGHTY_FAMILY
-
     found = available_starts(knot, n_beads, ALL_STARTS)
     if not found:
         # too few beads for the braid closure and the cage: an 80 (a figure eight and a
         # circle) needs more still, and its search of every spec took 36 s before the user
         # read the one-line error
         start_chain(knot, "braid", n_beads)  # raises, saying why
-    if knot.name in EIGHTY_FAMILY and not knot.n_equals_i:
+    if _eighty_is_a_default(knot):
         found += available_starts(knot, n_beads, ("eighty",))
     return found
+
+
+def _eighty_is_a_default(knot) -> bool:
+    """Is the 80 among the knot's default starts (when it fits): a knot of the 80 family
+    with n ≠ i (an n = i knot's ground state is its circular braid)."""
+    from stiffknots.knots.families import EIGHTY_FAMILY
+
+    return knot.name in EIGHTY_FAMILY and not knot.n_equals_i
 
 
 @functools.lru_cache(maxsize=4096)
@@ -126,16 +132,13 @@ def default_start_names(name: str, n_beads: int = 150) -> tuple[str, ...]:
     is found only when its chain was built and verified — building every knot's 80 again
     took 21 s for the 249 knots. () when no start fits."""
     from stiffknots.knots.catalogue import get_knot
-    from stiffknots.knots.eighty_embedding import _MAX_DIAGRAM, _spec_for
-    from stiffknots.knots.families import EIGHTY_FAMILY
+    from stiffknots.knots.eighty_embedding import has_eighty
 
     knot = get_knot(name)
     found = available_starts(knot, n_beads, ALL_STARTS)
     if not found:
         return ()
-    two_bridge = knot.bridge_number_range is None or knot.bridge_number_range[0] <= 2
-    if (knot.name in EIGHTY_FAMILY and not knot.n_equals_i and two_bridge
-            and _spec_for(knot.name, int(n_beads), _MAX_DIAGRAM) is not None):
+    if _eighty_is_a_default(knot) and has_eighty(knot, n_beads):
         found.append("eighty")
     return tuple(found)
 
