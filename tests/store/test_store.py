@@ -570,7 +570,8 @@ def test_kill_9_at_random_moments_leaves_no_half_row(tmp_path):
         out = p.stdout.read()  # (not communicate(): it would skip what readline buffered)
         p.stdout.close()
         p.stderr.close()
-        lines = [ln.split() for ln in out.splitlines()]
+        # a kill between the writes of one line would leave it cut: read whole lines only
+        lines = [ln.split() for ln in out.splitlines(keepends=True) if ln.endswith("\n")]
         begun |= {int(ln[1]) for ln in lines if ln[0] == "begin"}
         now_written = {int(ln[1]) for ln in lines if ln[0] == "done" and ln[2] == "1"}
         last = next((ln for ln in reversed(lines) if ln[0] in ("begin", "done")), ["ready"])

@@ -33,6 +33,14 @@ def row(seed: int, replica: int, beads: int) -> dict:
             "wall_seconds": 1.0, "shape": "4C", "start": "cage"}
 
 
+def say(*words: object) -> None:
+    """Print one line in one write: a kill -9 then leaves a whole line or none of it (print
+    writes its arguments one by one, and an unbuffered stdout, as under PYTHONUNBUFFERED, passes
+    each on at once)."""
+    sys.stdout.write(" ".join(map(str, words)) + "\n")
+    sys.stdout.flush()
+
+
 def chain(seed: int, replica: int, beads: int, base: np.ndarray) -> np.ndarray:
     return base + (seed * 100_000 + replica)
 
@@ -56,7 +64,7 @@ def main() -> None:
     if a.mode == "hang":
         def stop_before_commit(sql: str) -> None:
             if sql.startswith("COMMIT"):
-                print("in-transaction", flush=True)
+                say("in-transaction")
                 time.sleep(600)
 
         store._conn().set_trace_callback(stop_before_commit)  # test-only hook
@@ -66,7 +74,7 @@ def main() -> None:
 
     base = np.random.default_rng(a.seed).normal(size=(a.beads, 3))
     jobs = [(a.seed, r) for r in range(a.count)] + [(999, r) for r in range(a.shared)]
-    print("ready", flush=True)
+    say("ready")
     if a.barrier:
         while not Path(a.barrier).exists():
             time.sleep(0.005)
@@ -75,11 +83,11 @@ def main() -> None:
         if a.skip_stored and store.has(ReplicaKey("5_2", "bead", a.beads, 2 ** -0.5, seed, r,
                                                   HASH)):
             continue
-        print("begin", r, flush=True)
+        say("begin", r)
         ok = store.put(row(seed, r, a.beads), chain(seed, r, a.beads, base))
         inserted += ok
-        print("done", r, int(ok), flush=True)
-    print("inserted", inserted, flush=True)
+        say("done", r, int(ok))
+    say("inserted", inserted)
 
 
 if __name__ == "__main__":
