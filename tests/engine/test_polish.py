@@ -407,28 +407,75 @@ def test_jacobian_rows_are_the_constraint_gradients(exclusion):
     np.testing.assert_array_equal(gauge[n + 6:].toarray(), jac[n:])
 
 
-def test_a_singular_kkt_matrix_prints_nothing(capfd):
+@pytest.mark.parametrize("exclusion", ["bead", "tube"])
+@pytest.mark.parametrize("dense_rows", [0, 10**6], ids=["sparse-gram", "dense-gram"])
+def test_min_norm_solver_is_the_projection_kkt_solution(monkeypatch, exclusion, dense_rows):
+    """The projection's correction dx = Aᵀ(AAᵀ)⁻¹r (dense Cholesky or sparse LU of the Gram
+    matrix) equals the solution of the full KKT system [I Aᵀ; A 0][dx; y] = [0; r] it
+    replaced, on a tight 5_2 state with pieces near contact and a clamped open end."""
+    import scipy.sparse as sp
+
+    import stiffknots.engine.polish as P
+
+    monkeypatch.setattr(P, "DENSE_GRAM_ROWS", dense_rows)
+    x = fixture_chain("5_2_seed1_r1")
+    for closed, nfix in ((True, 0), (False, 2)):
+        prob = P._Problem(len(x), closed, P.EXCLUSIONS.index(exclusion), 1 / np.sqrt(2), nfix,
+                          False, 0.0)
+        cons = prob.candidates(x, 0.3)
+        _, _, wts, direc = cons.evaluate(x)
+        # independent rows: the bonds and every third piece (neighbouring pieces of one
+        # contact can be dependent, where only the regularised systems agree)
+        sel = np.arange(0, len(cons), 3)
+        assert len(sel) > 5, "no piece near contact: the test tested nothing"
+        _, b = prob.bond_residual(x)
+        a = prob.jacobian(x, b, cons.idx[sel], wts[sel], direc[sel], rigid=False)
+        rhs = a @ np.random.default_rng(1).normal(size=a.shape[1]) * 1e-3  # consistent
+        nf3 = 3 * prob.nf
+        lu = P._factor_kkt(sp.identity(nf3, format="csr"), a)
+        want = lu.solve(np.r_[np.zeros(nf3), rhs])[:nf3].reshape(-1, 3)
+        solver = P._MinNormSolver(prob, b, cons.idx[sel], wts[sel], direc[sel])
+        got = solver.solve(rhs)
+        assert got.shape == (prob.nf, 3)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
+        np.testing.assert_allclose(a @ got.ravel(), rhs, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("dense_rows", [0, 10**6], ids=["sparse-gram", "dense-gram"])
+def test_a_singular_kkt_matrix_prints_nothing(capfd, monkeypatch, dense_rows):
     # a tube-model 3_1 whose polish meets an exactly singular KKT matrix (dependent pieces):
     # SuperLU printed "** On entry to DTRSV parameter number 6 had an illegal value" on C's
-    # stdout before raising the error that the regularised retry handles
+    # stdout before raising the error that the regularised retry handles. The projection's
+    # Gram matrix AAᵀ is singular there too: factorised sparse (SuperLU) or dense (Cholesky,
+    # which raises), it is regularised and the polish converges either way.
     import stiffknots.engine.polish as P
+
+    monkeypatch.setattr(P, "DENSE_GRAM_ROWS", dense_rows)
 
     x = np.load(DATA.parent / "polish" / "3_1_tube_singular_kkt.npy")
     singular = []
-    real = P.splu
+    real_lu, real_cho = P.splu, P.scipy.linalg.cho_factor
 
-    def counting(k):
+    def counting_lu(k):
         try:
-            return real(k)
+            return real_lu(k)
         except RuntimeError:
-            singular.append(k.shape)
+            singular.append(("lu", k.shape))
             raise
 
-    P.splu = counting
-    try:
-        r = polish(x, exclusion="tube")
-    finally:
-        P.splu = real
+    def counting_cho(g, **kw):
+        try:
+            return real_cho(g, **kw)
+        except np.linalg.LinAlgError:
+            singular.append(("cholesky", g.shape))
+            raise
+
+    monkeypatch.setattr(P, "splu", counting_lu)
+    monkeypatch.setattr(P.scipy.linalg, "cho_factor", counting_cho)
+    r = polish(x, exclusion="tube")
+    monkeypatch.undo()
+    kinds = {k for k, _ in singular}
+    assert kinds >= ({"lu"} if dense_rows == 0 else {"cholesky"}), singular
     assert singular, "the fixture no longer meets a singular matrix"
     out, err = capfd.readouterr()
     assert "On entry to" not in out + err
