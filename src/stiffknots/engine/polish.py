@@ -1420,7 +1420,6 @@ class _Polisher:
         u0 = lu.solve(np.r_[-g, np.zeros(na)])
         if nm:
             jall = p.jacobian(pos, b, cons.idx, wts, direc, rigid=False)[nb:]
-            jall_rows = jall.toarray()  # dense rows: columns of Jᵀ read without sparse indexing
             ju0 = jall @ u0[:n]
             vcols = np.zeros((n + na, nm), order="F")  # K⁻¹ [J_pᵀ; 0], on demand
             sv = np.zeros((nm, nm), order="F")  # J_p K⁻¹ J_qᵀ, columns on demand (dense)
@@ -1442,7 +1441,9 @@ class _Polisher:
                 need = sel[~have[sel]]
                 if need.size:
                     rhs_cols = np.zeros((n + na, need.size))
-                    rhs_cols[:n] = jall_rows[need].T
+                    for j, r in enumerate(need.tolist()):  # column j: J's row r (CSR)
+                        lo, hi = jall.indptr[r], jall.indptr[r + 1]
+                        np.add.at(rhs_cols[:, j], jall.indices[lo:hi], jall.data[lo:hi])
                     vcols[:, need] = lu.solve(rhs_cols)
                     sv[:, need] = jall @ vcols[:n, need]
                     have[need] = True
