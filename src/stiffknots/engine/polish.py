@@ -123,6 +123,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from numba import njit
 from scipy.sparse.linalg import splu
+from threadpoolctl import threadpool_limits
 
 from stiffknots.engine.kernel import energy_chain
 from stiffknots.geometry import _clamp01, seg_dist2
@@ -1800,16 +1801,23 @@ def polish(
     if clear0 < -1e-10:
         raise ValueError(f"the chain violates the {exclusion} exclusion rule by {-clear0:.3g}")
     e0 = pol.energy(x)
-    # exact admissibility first: bonds to 1e-13, violated pieces pushed to limit + τ
-    cons = prob.candidates(x, 1e-3)
-    x1 = pol.project(x, cons, np.zeros(len(cons), dtype=bool))
-    if x1 is None or (guard and not pol.passage_ok(x, x1)):
-        x1 = x
-    xf, ef, it, converged, reason = pol.run(x1, int(max_iter), float(tol))
+    # one BLAS thread: the dense matrices are small (the Cholesky of ≤ DENSE_GRAM_ROWS rows,
+    # the working set's Schur complement), and replicas run on every core (the pool, Dask
+    # workers), where OpenBLAS's threads oversubscribed them: two concurrent tube polishes
+    # took 48 CPU s each with its default threads, 12.6 s with one (bench/RESULTS.md)
+    with threadpool_limits(limits=1, user_api="blas"):
+        # exact admissibility first: bonds to 1e-13, violated pieces pushed to limit + τ
+        cons = prob.candidates(x, 1e-3)
+        x1 = pol.project(x, cons, np.zeros(len(cons), dtype=bool))
+        if x1 is None or (guard and not pol.passage_ok(x, x1)):
+            x1 = x
+        xf, ef, it, converged, reason = pol.run(x1, int(max_iter), float(tol))
+        res, gn, _, akeys, amu = pol.kkt(xf)
     if ef > e0:  # nothing gained (only possible from the initial projection): keep the input
         xf, ef = x, e0
         reason += "; no energy decrease found, input returned"
-    res, gn, _, akeys, amu = pol.kkt(xf)
+        with threadpool_limits(limits=1, user_api="blas"):
+            res, gn, _, akeys, amu = pol.kkt(xf)
     gap_force = float(np.sum(amu[akeys >= 3 * n * n])) if len(akeys) else 0.0
     cons = prob.candidates(xf, 1e-3)
     dist = cons.evaluate(xf)[0]
