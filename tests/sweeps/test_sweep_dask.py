@@ -133,6 +133,32 @@ def test_sweep_on_an_existing_scheduler(tmp_path):
         assert {r["thickness"] for r in st.replicas()} == {models[0].thickness}
 
 
+def test_both_models_seed_a_bead_replica_from_the_tube_ground(tmp_path):
+    """With both models at one width the sweep seeds one bead replica per knot from the tube
+    ensemble's lowest replica once both ensembles have ended (stiffknots.sweeps.cross): it
+    joins the bead ensemble, lies at or below its tube start, and a rerun writes nothing."""
+    from stiffknots.sweeps.cross import SEEDED_REPLICA, SEEDED_START
+
+    models = parse_models("bead,tube")
+    budget = budget_of("tiny", moves=50_000)
+    rec = Recorder()
+    seeded = []
+    rec.seeded = seeded.append
+    with Store(tmp_path / "s.db") as st:
+        res = run_sweep(["3_1"], models, budget, st, seed=2, workers=2, listener=rec)
+        assert res.complete and res.ran == 4 and not res.failed
+        assert [e["knot"] for e in res.seeded] == ["3_1"] and seeded == res.seeded
+        (row,) = [r for r in st.replicas() if r["replica"] == SEEDED_REPLICA]
+        assert row["exclusion"] == "bead" and row["start"] == SEEDED_START
+        assert row["settings_hash"] == res.settings_hash["bead"]
+        tube_low = min(r["epsilon"] for r in st.replicas(exclusion="tube"))
+        assert row["extra"]["seeded_from"]["epsilon"] == tube_low
+        assert row["epsilon"] <= tube_low + 1e-9
+        assert st.count() == 5 and st.check()["ok"]
+        res2 = run_sweep(["3_1"], models, budget, st, seed=2, workers=2)
+        assert (res2.ran, res2.seeded, res2.failed) == (0, [], []) and st.count() == 5
+
+
 def test_a_job_that_cannot_be_built_is_reported_not_stored(tmp_path):
     """8_19 does not fit in 20 beads: its replicas fail (the worker's EmbeddingError), the
     sweep goes on and stores nothing for them."""

@@ -133,6 +133,15 @@ class SweepProgress:
             if self.task is not None:
                 self.progress.update(self.task, total=self.total)
 
+    def seeded(self, entry: dict) -> None:
+        with self.lock:
+            last = (f"{entry['knot']}/{entry['model']}: seeded from the tube ground, "
+                    f"ε = {entry['epsilon']:.2f}")
+            self._update(escape(last))
+            if self.log_lines:
+                self.progress.console.print(f"{time.strftime('%H:%M:%S')} {last}",
+                                            markup=False, highlight=False, soft_wrap=True)
+
     def finished(self, job, row, error) -> None:
         with self.lock:
             self.running.pop(job.id, None)
@@ -298,6 +307,12 @@ def _print(d: dict, mods) -> None:
                       f"{e['name']} {e['bead_above_tube']['bead']:.2f} > "
                       f"{e['bead_above_tube']['tube']:.2f}" for e in missed),
                   highlight=False, markup=False)
+    if sw.get("seeded"):
+        below = [e["knot"] for e in sw["seeded"]
+                 if e["bead_epsilon"] is None or e["epsilon"] < e["bead_epsilon"]]
+        out.print(f"{len(sw['seeded'])} bead-rule replicas seeded from the tube grounds (each "
+                  f"polished under the bead rule: start 'tube-ground'); below every bead "
+                  f"search: {', '.join(below) or 'none'}", highlight=False, markup=False)
     added = f", {sw['added']} added until converged" if sw["added"] else ""
     left = f", {sw['left']} not run" if sw["left"] else ""
     out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}"

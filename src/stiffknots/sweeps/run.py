@@ -13,7 +13,11 @@ comes back to the client, which
    thickness: the bead distance, or the tube diameter);
 3. writes it to the store (:meth:`Store.put <stiffknots.store.sqlite.Store.put>`): one
    transaction per row, so a killed client leaves whole rows or none, and a row whose key is
-   stored is not written again.
+   stored is not written again;
+4. once every ensemble of a knot has ended, seeds one more bead-rule replica from the tube
+   model's ground state (the tube chain is bead-admissible when w ≥ d; polished under the
+   bead rule, :mod:`stiffknots.sweeps.cross`), a safety net for the bead rule's glassy
+   searches.
 
 Replicas until converged. With ``max_replicas`` above the budget's replicas, a (knot, model)
 whose replicas have all ended without a converged ground state
@@ -49,6 +53,7 @@ from stiffknots.sweeps.cluster import (
     scheduler_address,
 )
 from stiffknots.sweeps.convergence import ensemble_converged as converged_with_every_start
+from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import (
     SweepJob,
@@ -83,6 +88,10 @@ class SweepListener:
     def added(self, jobs: int) -> None:
         """``jobs`` more jobs to run: replicas added to a (knot, model) not yet converged."""
 
+    def seeded(self, entry: dict) -> None:
+        """A bead-rule replica seeded from the tube ground was stored
+        (:func:`~stiffknots.sweeps.cross.seed_from_tube`'s entry)."""
+
     def expected(self, jobs: float, settled: int) -> None:
         """The jobs this sweep is now expected to run in all: those planned, and for every
         (knot, model) still open the replicas the settled ones were added on average
@@ -108,6 +117,8 @@ class SweepResult:
     workers : worker threads of the cluster; scheduler : ``"local"`` or its address.
     max_replicas : the most replicas a (knot, model) may get; added : replicas planned beyond
     the budget's for (knot, model)s not converged (counted in ``jobs``).
+    seeded : the bead replicas seeded from the tube ground and written now
+    (:mod:`stiffknots.sweeps.cross`): ``knot``, ``model``, ``epsilon``, ``tube_epsilon``.
     """
 
     knots: list[str]
@@ -127,6 +138,7 @@ class SweepResult:
     scheduler: str = "local"
     max_replicas: int = 0
     added: int = 0
+    seeded: list[dict] = field(default_factory=list)
     version: str = __version__
 
     @property
@@ -154,7 +166,7 @@ class SweepResult:
                 "wall_seconds": self.wall_seconds, "cpu_seconds": self.cpu_seconds,
                 "workers": self.workers, "scheduler": self.scheduler,
                 "max_replicas": self.max_replicas, "added": self.added,
-                "version": self.version}
+                "seeded": self.seeded, "version": self.version}
 
 
 def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | None = None
@@ -315,10 +327,43 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             feed.extendleft(reversed(extend(g)))
     listener.started(res)
     expect()
-    if not feed or not run:
+    if not run:
         res.wall_seconds = time.perf_counter() - t0
         return res
+    settings = {m.name: sweep_settings(m, budget) for m in res.models}
+    seeded_knots: set[str] = set()
 
+    def seed(knot: str) -> None:
+        """Seed the knot's bead ensemble from its tube ground (:mod:`stiffknots.sweeps.cross`)
+        once every ensemble of the knot has ended, none with a failed job: the seed is then
+        the tube ensemble's final lowest replica, as a rerun would find it."""
+        if knot in seeded_knots or res.interrupted \
+                or any(f["job"].split("/")[0] == knot for f in res.failed) \
+                or not all(groups[(knot, m.name)]["settled"] for m in res.models):
+            return
+        seeded_knots.add(knot)
+        for e in seed_from_tube(store, [knot], res.models, settings, res.seed, budget.name):
+            if e["written"]:
+                res.seeded.append(e)
+                listener.seeded(e)
+            elif e.get("reason"):
+                res.failed.append({"job": f"{knot}/{e['model']}/{SEEDED_START}",
+                                   "error": e["reason"]})
+
+    if feed:
+        _run_jobs(res, feed, groups, extend, expect, seed, store, budget, scheduler, workers,
+                  listener)
+    for k in res.knots:  # those settled before this sweep (a resumed or older sweep)
+        seed(k)
+    res.wall_seconds = time.perf_counter() - t0
+    return res
+
+
+def _run_jobs(res: SweepResult, feed: deque, groups: dict, extend: Any, expect: Any,
+              seed: Any, store: Store, budget: Budget, scheduler: str | None,
+              workers: int | None, listener: SweepListener) -> None:
+    """Run the jobs of ``feed`` (and those ``extend`` adds) on the cluster; store each;
+    ``seed(knot)`` once a (knot, model) has settled."""
     with connect(scheduler, workers) as client:
         from stiffknots.sweeps.cluster import import_distributed
 
@@ -374,6 +419,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                 if new:
                     feed.extendleft(reversed(new))
                     listener.added(len(new))
+                else:
+                    seed(sj.knot)
                 expect()
 
         try:
@@ -389,8 +436,6 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             futures = [f for _, f in inflight.values()]
             if futures:
                 client.cancel(futures)
-    res.wall_seconds = time.perf_counter() - t0
-    return res
 
 
 def _progress(listener: SweepListener, event: Any) -> None:

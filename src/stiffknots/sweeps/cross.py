@@ -1,0 +1,151 @@
+"""A bead-rule replica seeded from the tube model's ground state (a sweep's last step).
+
+Every tube-admissible chain of diameter w ≥ d is admissible under the bead rule of distance d
+at the same N: beads i, j at index distance ≥ 2 start or end two segments that share no bead
+(for j = i + 2: [i − 1, i] and [i + 2, i + 3]; for j ≥ i + 3: [i, i + 1] and [j, j + 1]),
+and their distance is at least those segments', ≥ w ≥ d. So the tube model's ground state is a
+bead-rule chain, and the bead rule's minimum lies at or below the tube ground polished under
+the bead rule. The bead rule's many contact registries make its Monte Carlo searches glassy:
+on 10_4 (N = 150, d = w = 1/√2) six bead searches ended at 260.73 or above while the tube
+ground, 223.89, polished under the bead rule ends at 210.76 (bench/RESULTS.md, 2026-12-03).
+
+After a sweep's replicas, :func:`seed_from_tube` therefore takes, for every knot with a bead
+ensemble and a tube ensemble of the same N and w ≥ d, the tube ensemble's lowest replica,
+polishes it under the bead rule (:func:`stiffknots.engine.polish.polish`: no strand passage,
+bonds and the rule held exactly), verifies its knot type and stores it in the bead ensemble
+as replica :data:`SEEDED_REPLICA` with ``start = "tube-ground"`` and, under ``extra``, the
+tube replica it came from (``seeded_from``) and the polish's figures. It is one more search
+of the bead ensemble — its verdict counts it like any replica (the rule of
+:mod:`stiffknots.sweeps.convergence`) — with no Monte Carlo of its own. Reproducible: it
+depends only on the stored tube replicas, themselves fixed by their seeds, and a stored key
+is never written again; a sweep resumed with more tube replicas does not replace it.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from stiffknots._version import __version__
+from stiffknots.store import ReplicaKey, Store, row_from_replica, settings_hash
+from stiffknots.sweeps.models import Model
+
+__all__ = ["SEEDED_REPLICA", "SEEDED_START", "seed_from_tube", "seed_pairs"]
+
+#: the replica number of the seeded bead replica in its ensemble's key (above every
+#: Monte Carlo replica: a sweep adds at most :data:`stiffknots.problems.validate.MAX_REPLICAS`)
+SEEDED_REPLICA = 1_000_000
+#: its ``start``
+SEEDED_START = "tube-ground"
+
+
+@dataclass
+class _Seeded:
+    """A replica result as :func:`~stiffknots.store.row_from_replica` reads one."""
+
+    coords: np.ndarray
+    epsilon: float
+    min_segment_distance: float
+    wall_time: float
+    cpu_time: float
+    knot_verified: bool
+    seed: int
+    replica: int = SEEDED_REPLICA
+    start: str = SEEDED_START
+    version: str = __version__
+    seeded_from: dict = field(default_factory=dict)
+    polish: dict = field(default_factory=dict)
+
+
+def seed_pairs(models: Sequence[Model]) -> list[tuple[Model, Model]]:
+    """(bead model, tube model) pairs of a sweep whose tube chains are bead-admissible: the
+    same N and w ≥ d."""
+    return [(b, t) for b in models if b.exclusion == "bead" for t in models
+            if t.exclusion == "tube" and t.beads == b.beads and t.thickness >= b.thickness]
+
+
+def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
+                   settings: Mapping[str, Mapping[str, Any]], seed: int,
+                   budget: str | None = None) -> list[dict]:
+    """Store, for every knot and :func:`seed_pairs` pair, the bead replica seeded from the
+    tube ensemble's lowest replica (module docstring); skip a key stored already.
+
+    Parameters
+    ----------
+    store : the sweep's store.
+    knots, models : the sweep's knots and models.
+    settings : model name → the settings of its replicas
+        (:func:`~stiffknots.sweeps.plan.sweep_settings`): the seeded row joins the bead
+        ensemble with the bead model's settings (the same hash).
+    seed : the sweep's seed (the key's seed).
+    budget : the budget's name (kept under ``extra``).
+
+    Returns
+    -------
+    list of dict
+        One entry per knot and pair tried: ``knot``, ``model``, ``written`` (bool),
+        ``epsilon`` (the seeded replica's, or None), ``tube_epsilon`` (its start's),
+        ``bead_epsilon`` (the bead ensemble's lowest before it, or None) and ``reason`` when
+        nothing was written.
+    """
+    from stiffknots.analysis import classify
+    from stiffknots.engine.polish import polish
+    from stiffknots.knots.identify import verify_knot
+    from stiffknots.measures import min_segment_distance
+
+    out = []
+    for bead, tube in seed_pairs(models):
+        bset = dict(settings[bead.name])
+        bh, th = settings_hash(bset), settings_hash(settings[tube.name])
+        for knot in knots:
+            key = ReplicaKey(knot, "bead", bead.beads, bead.thickness, int(seed),
+                             SEEDED_REPLICA, bh)
+            if store.has(key):
+                continue
+            rows = store.replicas(knot=knot, exclusion="tube", beads=tube.beads,
+                                  thickness=tube.thickness, settings_hash=th)
+            if not rows:
+                continue
+            low = rows[0]  # ordered by ε
+            t0, c0 = time.perf_counter(), time.process_time()
+            x = store.coords(low["id"])
+            res = polish(x, exclusion="bead", d=bead.thickness)
+            ok, found = verify_knot(res.pos, knot)
+            searched = store.replicas(knot=knot, exclusion="bead", beads=bead.beads,
+                                      thickness=bead.thickness, settings_hash=bh)
+            entry = {"knot": knot, "model": bead.name, "tube_epsilon": low["epsilon"],
+                     "bead_epsilon": searched[0]["epsilon"] if searched else None,
+                     "epsilon": None, "written": False}
+            if not ok:  # never expected: the polish cannot pass strands (its proof)
+                entry["reason"] = (f"TopologyChangedError: the seeded chain ended as {found}; "
+                                   "not stored")
+                out.append(entry)
+                continue
+            n = len(res.pos)
+            eps = n * res.energy
+            rep = _Seeded(
+                coords=res.pos, epsilon=eps,
+                min_segment_distance=float(min_segment_distance(res.pos, True)),
+                wall_time=time.perf_counter() - t0, cpu_time=time.process_time() - c0,
+                knot_verified=True, seed=int(low.get("replica_seed") or 0),
+                seeded_from={"exclusion": "tube", "thickness": tube.thickness,
+                             "beads": tube.beads, "seed": low["seed"],
+                             "replica": low["replica"], "settings_hash": th,
+                             "epsilon": low["epsilon"], "shape": low.get("shape")},
+                polish={"epsilon_before": n * res.energy_before, "iterations": res.iterations,
+                        "converged": res.converged, "kkt_residual": res.kkt_residual,
+                        "grad_norm": res.grad_norm, "reason": res.reason})
+            shape = classify(res.pos, True, d=bead.thickness)
+            row, coords = row_from_replica(
+                rep, knot=knot, exclusion="bead", thickness=bead.thickness, seed=int(seed),
+                settings=bset, beads=bead.beads, shape=shape.label,
+                multiplicity=shape.multiplicity, problem=bset["problem"],
+                extra={"model": bead.name, "budget": budget, "width": bead.width()["text"],
+                       "shape_reason": shape.reason})
+            entry.update(epsilon=eps, written=bool(store.put(row, coords)))
+            out.append(entry)
+    return out

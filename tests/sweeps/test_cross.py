@@ -1,0 +1,95 @@
+"""The bead replica seeded from the tube ground (stiffknots.sweeps.cross)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stiffknots.engine.kernel import energy_chain
+from stiffknots.knots.identify import verify_knot
+from stiffknots.measures import min_segment_distance
+from stiffknots.store import Store, settings_hash
+from stiffknots.sweeps import budget_of
+from stiffknots.sweeps.cross import SEEDED_REPLICA, SEEDED_START, seed_from_tube, seed_pairs
+from stiffknots.sweeps.models import Model
+from stiffknots.sweeps.plan import sweep_settings
+
+DATA = Path(__file__).resolve().parent.parent / "data"
+D = 2 ** -0.5
+
+
+def _row(knot, model, settings, replica, x, start="braid"):
+    n = len(x)
+    return {"knot": knot, "exclusion": model.exclusion, "beads": n,
+            "thickness": model.thickness, "seed": 0, "replica": replica,
+            "settings": settings, "problem": "anneal", "epsilon": n * energy_chain(x, False),
+            "shape": "other", "start": start, "knot_verified": True,
+            "min_segment_distance": float(min_segment_distance(x, True)), "wall_seconds": 1.0}
+
+
+def test_seed_pairs_need_the_same_beads_and_a_tube_at_least_as_wide():
+    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
+    assert seed_pairs([bead, tube]) == [(bead, tube)]
+    assert seed_pairs([bead, Model("tube", 0.5, 150)]) == []  # w < d: not bead-admissible
+    assert seed_pairs([bead, Model("tube", D, 300)]) == []
+    assert seed_pairs([bead]) == [] and seed_pairs([tube]) == []
+
+
+def test_seeded_replica_is_the_tube_ground_polished_under_the_bead_rule(tmp_path):
+    """A store with two tube replicas of 3_1 (tube-admissible chains, w = 1/√2) and one bead
+    replica: the seeded bead replica starts from the lower tube replica, ends bead-admissible
+    with unit bonds, keeps the knot, lies at or below the tube ε, joins the bead ensemble
+    (its settings hash) and is written once."""
+    budget = budget_of("tiny")
+    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
+    settings = {m.name: sweep_settings(m, budget) for m in (bead, tube)}
+    x_tube = np.load(DATA / "polish" / "3_1_tube_singular_kkt.npy")
+    x_bead = np.load(DATA / "analysis" / "3_1_seed1_r0.npy")
+    rng = np.random.default_rng(3)
+    rot = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    worse = x_tube[::-1] @ rot.T  # the same chain reversed and rotated ...
+    with Store(tmp_path / "s.db") as st:
+        st.put(_row("3_1", tube, settings["tube"], 0, x_tube), x_tube)
+        hi = _row("3_1", tube, settings["tube"], 1, worse)
+        hi["epsilon"] += 1.0  # ... stored as the higher replica: the lower must be taken
+        st.put(hi, worse)
+        st.put(_row("3_1", bead, settings["bead"], 0, x_bead), x_bead)
+        out = seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0, budget="tiny")
+        assert len(out) == 1 and out[0]["written"], out
+        assert out[0]["bead_epsilon"] == pytest.approx(150 * energy_chain(x_bead, False))
+        (row,) = [r for r in st.replicas(exclusion="bead") if r["replica"] == SEEDED_REPLICA]
+        assert row["start"] == SEEDED_START and row["knot_verified"] is True
+        assert row["settings_hash"] == settings_hash(settings["bead"])
+        assert row["extra"]["seeded_from"]["replica"] == 0
+        y = st.coords(row["id"])
+        n = len(y)
+        bonds = np.linalg.norm(np.roll(y, -1, axis=0) - y, axis=1)
+        assert np.max(np.abs(bonds - 1)) < 1e-10
+        dist = np.linalg.norm(y[:, None] - y[None], axis=2)
+        idx = np.arange(n)
+        sep = np.abs(idx[:, None] - idx[None])
+        sep = np.minimum(sep, n - sep)
+        assert dist[sep >= 2].min() >= D - 1e-10  # the bead rule
+        assert verify_knot(y, "3_1")[0]
+        tube_eps = n * energy_chain(x_tube, False)
+        assert row["epsilon"] == pytest.approx(n * energy_chain(y, False), rel=1e-12)
+        assert row["epsilon"] <= tube_eps + 1e-9
+        assert row["extra"]["polish"]["epsilon_before"] == pytest.approx(tube_eps, rel=1e-9)
+        ens = st.states("3_1", "bead", 150, D, settings_hash(settings["bead"]))
+        assert ens["replicas"] == 2
+        # written once: a second pass skips the stored key
+        assert seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0) == []
+        assert st.count(exclusion="bead") == 2
+
+
+def test_nothing_is_seeded_without_a_tube_ensemble(tmp_path):
+    budget = budget_of("tiny")
+    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
+    settings = {m.name: sweep_settings(m, budget) for m in (bead, tube)}
+    x_bead = np.load(DATA / "analysis" / "3_1_seed1_r0.npy")
+    with Store(tmp_path / "s.db") as st:
+        st.put(_row("3_1", bead, settings["bead"], 0, x_bead), x_bead)
+        assert seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0) == []
+        assert st.count() == 1
