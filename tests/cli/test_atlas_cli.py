@@ -363,12 +363,14 @@ def test_progress_lines_where_stderr_is_not_a_terminal():
                      {"shape": "CB", "multiplicity": 2, "epsilon": 79.0182}, None)
         bar.added(2)
         bar.finished(SimpleNamespace(id="4_1/bead/r0"), None, "boom")
+        bar.seeded({"knot": "4_1", "model": "bead", "epsilon": 127.4567})
     lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
     assert lines[0] == "1 of 4 jobs already stored: skipped"
     # nothing settled yet: the time left counts the plan alone, and says it is a lower bound
     assert " 1/3 jobs, 0:00:00 elapsed, ETA ≥ 0:00:00 — 3_1/bead/r1: ε = 79.02 CB(i=2)" in lines[1]
     assert " 2/5 jobs, " in lines[2] and lines[2].endswith("4_1/bead/r0: failed")
-    assert len(lines) == 3
+    assert lines[3].endswith("4_1/bead: seeded from the tube ground, ε = 127.46")
+    assert len(lines) == 4
     # with --json nothing at all; on a terminal the bar, not the lines
     quiet = io.StringIO()
     bar = SweepProgress(disable=True, console=Console(file=quiet, force_terminal=False))
@@ -381,7 +383,7 @@ def test_progress_lines_where_stderr_is_not_a_terminal():
     from stiffknots.sweeps import SweepListener
 
     hooks = [k for k, v in vars(SweepListener).items() if callable(v) and not k.startswith("_")]
-    assert len(hooks) == 6 and all(callable(getattr(SweepProgress, k)) for k in hooks)
+    assert len(hooks) == 7 and all(callable(getattr(SweepProgress, k)) for k in hooks)
 
 
 def test_time_left_counts_the_replicas_still_to_be_added():

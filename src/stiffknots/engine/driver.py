@@ -789,7 +789,10 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
     if ck.path is not None:
         save(len(steps))
     best = state
-    if best_pos is not None and best_stage != steps[-1].stage:
+    # the best candidate, unless it is the final state itself; with hops a candidate is the
+    # polished chain, which differs from the final state even when the last stage won
+    if best_pos is not None and (best_stage != steps[-1].stage
+                                 or not np.array_equal(best_pos, state.pos)):
         best = ChainState(best_pos, state.params, seed=0, ensemble=settings.ensemble)
     return make_result(replica, seed, settings, best, state.acceptance(), traces, clock, hit,
                        stage_epsilon=stage_eps, best_stage=best_stage,
