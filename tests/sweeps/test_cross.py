@@ -55,6 +55,9 @@ def test_seeded_replica_is_the_tube_ground_polished_under_the_bead_rule(tmp_path
         hi = _row("3_1", tube, settings["tube"], 1, worse)
         hi["epsilon"] += 1.0  # ... stored as the higher replica: the lower must be taken
         st.put(hi, worse)
+        other = _row("3_1", tube, settings["tube"], 0, worse)
+        other["seed"], other["epsilon"] = 7, other["epsilon"] - 5.0  # another sweep's: unused
+        st.put(other, worse)
         st.put(_row("3_1", bead, settings["bead"], 0, x_bead), x_bead)
         out = seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0, budget="tiny")
         assert len(out) == 1 and out[0]["written"], out
@@ -63,6 +66,7 @@ def test_seeded_replica_is_the_tube_ground_polished_under_the_bead_rule(tmp_path
         assert row["start"] == SEEDED_START and row["knot_verified"] is True
         assert row["settings_hash"] == settings_hash(settings["bead"])
         assert row["extra"]["seeded_from"]["replica"] == 0
+        assert row["extra"]["seeded_from"]["seed"] == 0
         y = st.coords(row["id"])
         n = len(y)
         bonds = np.linalg.norm(np.roll(y, -1, axis=0) - y, axis=1)

@@ -10,15 +10,16 @@ on 10_4 (N = 150, d = w = 1/√2) six bead searches ended at 260.73 or above whi
 ground, 223.89, polished under the bead rule ends at 210.76 (bench/RESULTS.md, 2026-12-03).
 
 After a sweep's replicas, :func:`seed_from_tube` therefore takes, for every knot with a bead
-ensemble and a tube ensemble of the same N and w ≥ d, the tube ensemble's lowest replica,
-polishes it under the bead rule (:func:`stiffknots.engine.polish.polish`: no strand passage,
-bonds and the rule held exactly), verifies its knot type and stores it in the bead ensemble
-as replica :data:`SEEDED_REPLICA` with ``start = "tube-ground"`` and, under ``extra``, the
-tube replica it came from (``seeded_from``) and the polish's figures. It is one more search
-of the bead ensemble — its verdict counts it like any replica (the rule of
+ensemble and a tube ensemble of the same N and w ≥ d, the lowest tube replica of the sweep
+(its seed), polishes it under the bead rule (:func:`stiffknots.engine.polish.polish`: no
+strand passage, bonds and the rule held exactly), verifies its knot type and stores it in the
+bead ensemble as replica :data:`SEEDED_REPLICA` with ``start = "tube-ground"`` and, under
+``extra``, the tube replica it came from (``seeded_from``) and the polish's figures. It is
+one more search of the bead ensemble — its verdict counts it like any replica (the rule of
 :mod:`stiffknots.sweeps.convergence`) — with no Monte Carlo of its own. Reproducible: it
-depends only on the stored tube replicas, themselves fixed by their seeds, and a stored key
-is never written again; a sweep resumed with more tube replicas does not replace it.
+depends only on the sweep's stored tube replicas (its seed), themselves fixed by their seeds,
+and a stored key is never written again; a sweep resumed with more tube replicas does not
+replace it.
 """
 
 from __future__ import annotations
@@ -106,8 +107,10 @@ def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
                              SEEDED_REPLICA, bh)
             if store.has(key):
                 continue
+            # this sweep's tube replicas only (its seed): another sweep's would make the seed
+            # depend on which ran first
             rows = store.replicas(knot=knot, exclusion="tube", beads=tube.beads,
-                                  thickness=tube.thickness, settings_hash=th)
+                                  thickness=tube.thickness, settings_hash=th, seed=int(seed))
             if not rows:
                 continue
             low = rows[0]  # ordered by ε
@@ -116,7 +119,8 @@ def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
             res = polish(x, exclusion="bead", d=bead.thickness)
             ok, found = verify_knot(res.pos, knot)
             searched = store.replicas(knot=knot, exclusion="bead", beads=bead.beads,
-                                      thickness=bead.thickness, settings_hash=bh)
+                                      thickness=bead.thickness, settings_hash=bh,
+                                      seed=int(seed))
             entry = {"knot": knot, "model": bead.name, "tube_epsilon": low["epsilon"],
                      "bead_epsilon": searched[0]["epsilon"] if searched else None,
                      "epsilon": None, "written": False}
