@@ -333,7 +333,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
     settings = {m.name: sweep_settings(m, budget) for m in res.models}
     seeded_knots: set[str] = set()
 
-    def seed(knot: str) -> None:
+    def seed_knot(knot: str) -> None:
         """Seed the knot's bead ensemble from its tube ground (:mod:`stiffknots.sweeps.cross`)
         once every ensemble of the knot has ended, none with a failed job: the seed is then
         the tube ensemble's final lowest replica, as a rerun would find it."""
@@ -351,19 +351,19 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                                    "error": e["reason"]})
 
     if feed:
-        _run_jobs(res, feed, groups, extend, expect, seed, store, budget, scheduler, workers,
-                  listener)
+        _run_jobs(res, feed, groups, extend, expect, seed_knot, store, budget, scheduler,
+                  workers, listener)
     for k in res.knots:  # those settled before this sweep (a resumed or older sweep)
-        seed(k)
+        seed_knot(k)
     res.wall_seconds = time.perf_counter() - t0
     return res
 
 
 def _run_jobs(res: SweepResult, feed: deque, groups: dict, extend: Any, expect: Any,
-              seed: Any, store: Store, budget: Budget, scheduler: str | None,
+              seed_knot: Any, store: Store, budget: Budget, scheduler: str | None,
               workers: int | None, listener: SweepListener) -> None:
     """Run the jobs of ``feed`` (and those ``extend`` adds) on the cluster; store each;
-    ``seed(knot)`` once a (knot, model) has settled."""
+    ``seed_knot(knot)`` once a (knot, model) has settled."""
     with connect(scheduler, workers) as client:
         from stiffknots.sweeps.cluster import import_distributed
 
@@ -420,7 +420,7 @@ def _run_jobs(res: SweepResult, feed: deque, groups: dict, extend: Any, expect: 
                     feed.extendleft(reversed(new))
                     listener.added(len(new))
                 else:
-                    seed(sj.knot)
+                    seed_knot(sj.knot)
                 expect()
 
         try:
