@@ -351,91 +351,82 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                                    "error": e["reason"]})
 
     if feed:
-        _run_jobs(res, feed, groups, extend, expect, seed_knot, store, budget, scheduler,
-                  workers, listener)
+        with connect(scheduler, workers) as client:
+            from stiffknots.sweeps.cluster import import_distributed
+
+            import_distributed()
+            from distributed import as_completed
+
+            threads = sum(client.nthreads().values()) or 1
+            res.workers = threads
+            listener.cluster(str(scheduler or f"local cluster, {threads} worker processes"),
+                             threads)
+            client.subscribe_topic(PROGRESS_TOPIC, lambda ev: _progress(listener, ev))
+            limit = max(4, 2 * threads)
+            inflight: dict[str, tuple[SweepJob, Any]] = {}
+            ac = as_completed()
+
+            def fail(sj: SweepJob, error: str) -> None:
+                res.failed.append({"job": sj.id, "error": error})
+                listener.finished(sj, None, error)
+
+            def top_up() -> None:
+                while len(inflight) < limit and feed:
+                    sj = feed.popleft()
+                    b = replace(budget, replicas=groups[sj.group]["replicas"])
+                    fut = client.submit(run_task, sj, b, key=sj.task_key)
+                    inflight[fut.key] = (sj, fut)
+                    ac.add(fut)
+
+            def collect(fut: Any) -> None:
+                sj, _ = inflight.pop(fut.key)
+                g = groups[sj.group]
+                g["open"] -= 1
+                if fut.status != "finished":
+                    exc = fut.exception() if fut.status == "error" else None
+                    fail(sj, f"{type(exc).__name__}: {exc}" if exc is not None else fut.status)
+                else:
+                    r = fut.result()
+                    fut.release()
+                    if not r.knot_verified:
+                        fail(sj, f"TopologyChangedError: the replica ended as {r.knot} (a bug in "
+                                 f"stiffknots, please report it with seed {sj.seed}); not stored")
+                    else:
+                        try:
+                            written, row = store_replica(store, sj, r, budget=budget.name)
+                        except KeyCollisionError as e:
+                            fail(sj, f"KeyCollisionError: {e}")
+                        else:
+                            res.ran += 1
+                            res.written += int(written)
+                            res.cpu_seconds += float(r.cpu_time or 0.0)
+                            listener.finished(sj, row, None)
+                if g["open"] == 0 and not res.interrupted:
+                    new = extend(g)
+                    if new:
+                        feed.extendleft(reversed(new))
+                        listener.added(len(new))
+                    else:
+                        seed_knot(sj.knot)
+                    expect()
+
+            try:
+                top_up()
+                for fut in ac:
+                    collect(fut)
+                    top_up()
+            except KeyboardInterrupt:
+                res.interrupted = True
+                for _key, (_sj, fut) in list(inflight.items()):
+                    if fut.status == "finished":  # arrived meanwhile: keep it
+                        collect(fut)
+                futures = [f for _, f in inflight.values()]
+                if futures:
+                    client.cancel(futures)
     for k in res.knots:  # those settled before this sweep (a resumed or older sweep)
         seed_knot(k)
     res.wall_seconds = time.perf_counter() - t0
     return res
-
-
-def _run_jobs(res: SweepResult, feed: deque, groups: dict, extend: Any, expect: Any,
-              seed_knot: Any, store: Store, budget: Budget, scheduler: str | None,
-              workers: int | None, listener: SweepListener) -> None:
-    """Run the jobs of ``feed`` (and those ``extend`` adds) on the cluster; store each;
-    ``seed_knot(knot)`` once a (knot, model) has settled."""
-    with connect(scheduler, workers) as client:
-        from stiffknots.sweeps.cluster import import_distributed
-
-        import_distributed()
-        from distributed import as_completed
-
-        threads = sum(client.nthreads().values()) or 1
-        res.workers = threads
-        listener.cluster(str(scheduler or f"local cluster, {threads} worker processes"),
-                         threads)
-        client.subscribe_topic(PROGRESS_TOPIC, lambda ev: _progress(listener, ev))
-        limit = max(4, 2 * threads)
-        inflight: dict[str, tuple[SweepJob, Any]] = {}
-        ac = as_completed()
-
-        def fail(sj: SweepJob, error: str) -> None:
-            res.failed.append({"job": sj.id, "error": error})
-            listener.finished(sj, None, error)
-
-        def top_up() -> None:
-            while len(inflight) < limit and feed:
-                sj = feed.popleft()
-                b = replace(budget, replicas=groups[sj.group]["replicas"])
-                fut = client.submit(run_task, sj, b, key=sj.task_key)
-                inflight[fut.key] = (sj, fut)
-                ac.add(fut)
-
-        def collect(fut: Any) -> None:
-            sj, _ = inflight.pop(fut.key)
-            g = groups[sj.group]
-            g["open"] -= 1
-            if fut.status != "finished":
-                exc = fut.exception() if fut.status == "error" else None
-                fail(sj, f"{type(exc).__name__}: {exc}" if exc is not None else fut.status)
-            else:
-                r = fut.result()
-                fut.release()
-                if not r.knot_verified:
-                    fail(sj, f"TopologyChangedError: the replica ended as {r.knot} (a bug in "
-                             f"stiffknots, please report it with seed {sj.seed}); not stored")
-                else:
-                    try:
-                        written, row = store_replica(store, sj, r, budget=budget.name)
-                    except KeyCollisionError as e:
-                        fail(sj, f"KeyCollisionError: {e}")
-                    else:
-                        res.ran += 1
-                        res.written += int(written)
-                        res.cpu_seconds += float(r.cpu_time or 0.0)
-                        listener.finished(sj, row, None)
-            if g["open"] == 0 and not res.interrupted:
-                new = extend(g)
-                if new:
-                    feed.extendleft(reversed(new))
-                    listener.added(len(new))
-                else:
-                    seed_knot(sj.knot)
-                expect()
-
-        try:
-            top_up()
-            for fut in ac:
-                collect(fut)
-                top_up()
-        except KeyboardInterrupt:
-            res.interrupted = True
-            for _key, (_sj, fut) in list(inflight.items()):
-                if fut.status == "finished":  # arrived meanwhile: keep it
-                    collect(fut)
-            futures = [f for _, f in inflight.values()]
-            if futures:
-                client.cancel(futures)
 
 
 def _progress(listener: SweepListener, event: Any) -> None:
