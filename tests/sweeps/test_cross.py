@@ -12,7 +12,13 @@ from stiffknots.knots.identify import verify_knot
 from stiffknots.measures import min_segment_distance
 from stiffknots.store import Store, settings_hash
 from stiffknots.sweeps import budget_of
-from stiffknots.sweeps.cross import SEEDED_REPLICA, SEEDED_START, seed_from_tube, seed_pairs
+from stiffknots.sweeps.cross import (
+    OLDER_SEEDED_REPLICA,
+    SEEDED_REPLICA,
+    SEEDED_START,
+    seed_from_tube,
+    seed_pairs,
+)
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import sweep_settings
 
@@ -37,11 +43,24 @@ def test_seed_pairs_need_the_same_beads_and_a_tube_at_least_as_wide():
     assert seed_pairs([bead]) == [] and seed_pairs([tube]) == []
 
 
-def test_seeded_replica_is_the_tube_ground_polished_under_the_bead_rule(tmp_path):
-    """A store with two tube replicas of 3_1 (tube-admissible chains, w = 1/√2) and one bead
-    replica: the seeded bead replica starts from the lower tube replica, ends bead-admissible
-    with unit bonds, keeps the knot, lies at or below the tube ε, joins the bead ensemble
-    (its settings hash) and is written once."""
+def _check_bead_admissible_3_1(y):
+    n = len(y)
+    bonds = np.linalg.norm(np.roll(y, -1, axis=0) - y, axis=1)
+    assert np.max(np.abs(bonds - 1)) < 1e-10
+    dist = np.linalg.norm(y[:, None] - y[None], axis=2)
+    idx = np.arange(n)
+    sep = np.abs(idx[:, None] - idx[None])
+    sep = np.minimum(sep, n - sep)
+    assert dist[sep >= 2].min() >= D - 1e-10  # the bead rule
+    assert verify_knot(y, "3_1")[0]
+
+
+def test_every_tube_replica_seeds_a_bead_replica_polished_under_the_bead_rule(tmp_path):
+    """A store with two tube replicas of 3_1 (tube-admissible chains, w = 1/√2), one of
+    another sweep, and one bead replica: each of the sweep's tube replicas seeds a bead
+    replica (SEEDED_REPLICA + its number) that ends bead-admissible with unit bonds, keeps the
+    knot, lies at or below its tube ε, joins the bead ensemble (its settings hash) and is
+    written once; the other sweep's tube replica seeds nothing."""
     budget = budget_of("tiny")
     bead, tube = Model("bead", D, 150), Model("tube", D, 150)
     settings = {m.name: sweep_settings(m, budget) for m in (bead, tube)}
@@ -49,42 +68,61 @@ def test_seeded_replica_is_the_tube_ground_polished_under_the_bead_rule(tmp_path
     x_bead = np.load(DATA / "analysis" / "3_1_seed1_r0.npy")
     rng = np.random.default_rng(3)
     rot = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    worse = x_tube[::-1] @ rot.T  # the same chain reversed and rotated ...
+    worse = x_tube[::-1] @ rot.T  # the same chain reversed and rotated
     with Store(tmp_path / "s.db") as st:
         st.put(_row("3_1", tube, settings["tube"], 0, x_tube), x_tube)
-        hi = _row("3_1", tube, settings["tube"], 1, worse)
-        hi["epsilon"] += 1.0  # ... stored as the higher replica: the lower must be taken
-        st.put(hi, worse)
+        st.put(_row("3_1", tube, settings["tube"], 1, worse), worse)
         other = _row("3_1", tube, settings["tube"], 0, worse)
-        other["seed"], other["epsilon"] = 7, other["epsilon"] - 5.0  # another sweep's: unused
+        other["seed"] = 7  # another sweep's: unused
         st.put(other, worse)
         st.put(_row("3_1", bead, settings["bead"], 0, x_bead), x_bead)
         out = seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0, budget="tiny")
-        assert len(out) == 1 and out[0]["written"], out
+        assert [(e["tube_replica"], e["written"]) for e in out] == [(0, True), (1, True)], out
         assert out[0]["bead_epsilon"] == pytest.approx(150 * energy_chain(x_bead, False))
-        (row,) = [r for r in st.replicas(exclusion="bead") if r["replica"] == SEEDED_REPLICA]
-        assert row["start"] == SEEDED_START and row["knot_verified"] is True
-        assert row["settings_hash"] == settings_hash(settings["bead"])
-        assert row["extra"]["seeded_from"]["replica"] == 0
-        assert row["extra"]["seeded_from"]["seed"] == 0
-        y = st.coords(row["id"])
-        n = len(y)
-        bonds = np.linalg.norm(np.roll(y, -1, axis=0) - y, axis=1)
-        assert np.max(np.abs(bonds - 1)) < 1e-10
-        dist = np.linalg.norm(y[:, None] - y[None], axis=2)
-        idx = np.arange(n)
-        sep = np.abs(idx[:, None] - idx[None])
-        sep = np.minimum(sep, n - sep)
-        assert dist[sep >= 2].min() >= D - 1e-10  # the bead rule
-        assert verify_knot(y, "3_1")[0]
-        tube_eps = n * energy_chain(x_tube, False)
-        assert row["epsilon"] == pytest.approx(n * energy_chain(y, False), rel=1e-12)
-        assert row["epsilon"] <= tube_eps + 1e-9
-        assert row["extra"]["polish"]["epsilon_before"] == pytest.approx(tube_eps, rel=1e-9)
+        rows = {r["replica"]: r for r in st.replicas(exclusion="bead")
+                if r["start"] == SEEDED_START}
+        assert sorted(rows) == [SEEDED_REPLICA, SEEDED_REPLICA + 1]
+        for r, x in ((0, x_tube), (1, worse)):
+            row = rows[SEEDED_REPLICA + r]
+            assert row["knot_verified"] is True and row["seed"] == 0
+            assert row["settings_hash"] == settings_hash(settings["bead"])
+            assert row["extra"]["seeded_from"]["replica"] == r
+            assert row["extra"]["seeded_from"]["seed"] == 0
+            y = st.coords(row["id"])
+            _check_bead_admissible_3_1(y)
+            tube_eps = len(y) * energy_chain(x, False)
+            assert row["epsilon"] == pytest.approx(len(y) * energy_chain(y, False), rel=1e-12)
+            assert row["epsilon"] <= tube_eps + 1e-9
+            assert row["extra"]["polish"]["epsilon_before"] == pytest.approx(tube_eps,
+                                                                             rel=1e-9)
         ens = st.states("3_1", "bead", 150, D, settings_hash(settings["bead"]))
-        assert ens["replicas"] == 2
-        # written once: a second pass skips the stored key
+        assert ens["replicas"] == 3
+        # written once: a second pass skips the stored keys
         assert seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0) == []
+        assert st.count(exclusion="bead") == 3
+        # a tube replica added later is seeded, the others not again
+        st.put(_row("3_1", tube, settings["tube"], 2, x_tube), x_tube)
+        out = seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0)
+        assert [(e["tube_replica"], e["written"]) for e in out] == [(2, True)]
+
+
+def test_a_tube_replica_seeded_under_the_older_rule_is_not_seeded_again(tmp_path):
+    """Before every tube replica seeded one, only the lowest did, as replica SEEDED_REPLICA
+    whatever its number: a tube replica named by a stored seeded row's ``seeded_from`` is
+    skipped (no search counted twice), the others are seeded."""
+    budget = budget_of("tiny")
+    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
+    settings = {m.name: sweep_settings(m, budget) for m in (bead, tube)}
+    x_tube = np.load(DATA / "polish" / "3_1_tube_singular_kkt.npy")
+    with Store(tmp_path / "s.db") as st:
+        st.put(_row("3_1", tube, settings["tube"], 0, x_tube), x_tube)
+        st.put(_row("3_1", tube, settings["tube"], 1, x_tube), x_tube)
+        old = _row("3_1", bead, settings["bead"], OLDER_SEEDED_REPLICA, x_tube,
+                   start=SEEDED_START)
+        old["extra"] = {"seeded_from": {"replica": 1}}
+        st.put(old, x_tube)
+        out = seed_from_tube(st, ["3_1"], [bead, tube], settings, seed=0)
+        assert [(e["tube_replica"], e["written"]) for e in out] == [(0, True)]
         assert st.count(exclusion="bead") == 2
 
 

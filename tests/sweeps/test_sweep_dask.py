@@ -133,10 +133,13 @@ def test_sweep_on_an_existing_scheduler(tmp_path):
         assert {r["thickness"] for r in st.replicas()} == {models[0].thickness}
 
 
-def test_both_models_seed_a_bead_replica_from_the_tube_ground(tmp_path):
-    """With both models at one width the sweep seeds one bead replica per knot from the tube
-    ensemble's lowest replica once both ensembles have ended (stiffknots.sweeps.cross): it
-    joins the bead ensemble, lies at or below its tube start, and a rerun writes nothing."""
+def test_both_models_seed_a_bead_replica_from_every_tube_replica(tmp_path):
+    """With both models at one width the sweep seeds a bead replica from each tube replica
+    once the tube ensemble's replicas have ended (stiffknots.sweeps.cross): each joins the
+    bead ensemble and lies at or below its tube start; the bead ensemble is judged with them
+    (no bead replica added when the seeded ones make it converged); a rerun writes nothing."""
+    from stiffknots.analysis import group_states
+    from stiffknots.sweeps import is_converged
     from stiffknots.sweeps.cross import SEEDED_REPLICA, SEEDED_START
 
     models = parse_models("bead,tube")
@@ -145,18 +148,33 @@ def test_both_models_seed_a_bead_replica_from_the_tube_ground(tmp_path):
     seeded = []
     rec.seeded = seeded.append
     with Store(tmp_path / "s.db") as st:
-        res = run_sweep(["3_1"], models, budget, st, seed=2, workers=2, listener=rec)
-        assert res.complete and res.ran == 4 and not res.failed
-        assert [e["knot"] for e in res.seeded] == ["3_1"] and seeded == res.seeded
-        (row,) = [r for r in st.replicas() if r["replica"] == SEEDED_REPLICA]
-        assert row["exclusion"] == "bead" and row["start"] == SEEDED_START
-        assert row["settings_hash"] == res.settings_hash["bead"]
-        tube_low = min(r["epsilon"] for r in st.replicas(exclusion="tube"))
-        assert row["extra"]["seeded_from"]["epsilon"] == tube_low
-        assert row["epsilon"] <= tube_low + 1e-9
-        assert st.count() == 5 and st.check()["ok"]
-        res2 = run_sweep(["3_1"], models, budget, st, seed=2, workers=2)
-        assert (res2.ran, res2.seeded, res2.failed) == (0, [], []) and st.count() == 5
+        res = run_sweep(["3_1"], models, budget, st, seed=2, workers=2, listener=rec,
+                        max_replicas=4)
+        assert not res.failed and not res.interrupted
+        tube = {r["replica"]: r for r in st.replicas(exclusion="tube")}
+        assert sorted(e["tube_replica"] for e in res.seeded) == sorted(tube)
+        assert seeded == res.seeded
+        rows = st.replicas(exclusion="bead")
+        seeded_rows = [r for r in rows if r["start"] == SEEDED_START]
+        assert sorted(r["replica"] for r in seeded_rows) == [SEEDED_REPLICA + k for k in tube]
+        for row in seeded_rows:
+            assert row["settings_hash"] == res.settings_hash["bead"]
+            src = tube[row["replica"] - SEEDED_REPLICA]
+            assert row["extra"]["seeded_from"]["epsilon"] == src["epsilon"]
+            assert row["epsilon"] <= src["epsilon"] + 1e-9
+        # the bead verdict after its first two replicas counted the seeded ones
+        first = [r for r in rows if r["replica"] < 2 or r["start"] == SEEDED_START]
+        states = group_states([{"label": r["shape"], "multiplicity": r["multiplicity"],
+                                "epsilon": r["epsilon"]} for r in first], 0.01).states
+        g = states[0]
+        agreed = is_converged({"count": g.count, "epsilon": g.eps_min,
+                               "eps_all": [first[k]["epsilon"] for k in g.members]})
+        native = [r for r in rows if r["start"] != SEEDED_START]
+        assert len(native) == 2 or not agreed, (agreed, len(native))
+        n = st.count()
+        assert st.check()["ok"]
+        res2 = run_sweep(["3_1"], models, budget, st, seed=2, workers=2, max_replicas=4)
+        assert (res2.ran, res2.seeded, res2.failed) == (0, [], []) and st.count() == n
 
 
 def test_a_job_that_cannot_be_built_is_reported_not_stored(tmp_path):

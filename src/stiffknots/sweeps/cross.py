@@ -1,25 +1,28 @@
-"""A bead-rule replica seeded from the tube model's ground state (a sweep's last step).
+"""Bead-rule replicas seeded from the tube model's replicas (a sweep's cross-model step).
 
 Every tube-admissible chain of diameter w ≥ d is admissible under the bead rule of distance d
 at the same N: beads i, j at index distance ≥ 2 start or end two segments that share no bead
 (for j = i + 2: [i − 1, i] and [i + 2, i + 3]; for j ≥ i + 3: [i, i + 1] and [j, j + 1]),
-and their distance is at least those segments', ≥ w ≥ d. So the tube model's ground state is a
-bead-rule chain, and the bead rule's minimum lies at or below the tube ground polished under
-the bead rule. The bead rule's many contact registries make its Monte Carlo searches glassy:
-on 10_4 (N = 150, d = w = 1/√2) six bead searches ended at 260.73 or above while the tube
+and their distance is at least those segments', ≥ w ≥ d. So every tube replica's end state is
+a bead-rule chain, and the bead rule's minimum lies at or below any of them polished under the
+bead rule. The bead rule's many contact registries make its Monte Carlo searches glassy: on
+10_4 (N = 150, d = w = 1/√2) six bead searches ended at 260.73 or above while the tube
 ground, 223.89, polished under the bead rule ends at 210.76 (bench/RESULTS.md, 2026-12-03).
+The tube model's smoother landscape is a better search of the bead rule's: a tube annealing,
+then a bead-rule polish.
 
-After a sweep's replicas, :func:`seed_from_tube` therefore takes, for every knot with a bead
-ensemble and a tube ensemble of the same N and w ≥ d, the lowest tube replica of the sweep
-(its seed), polishes it under the bead rule (:func:`stiffknots.engine.polish.polish`: no
-strand passage, bonds and the rule held exactly), verifies its knot type and stores it in the
-bead ensemble as replica :data:`SEEDED_REPLICA` with ``start = "tube-ground"`` and, under
-``extra``, the tube replica it came from (``seeded_from``) and the polish's figures. It is
-one more search of the bead ensemble — its verdict counts it like any replica (the rule of
-:mod:`stiffknots.sweeps.convergence`) — with no Monte Carlo of its own. Reproducible: it
-depends only on the sweep's stored tube replicas (its seed), themselves fixed by their seeds,
-and a stored key is never written again; a sweep resumed with more tube replicas does not
-replace it.
+:func:`seed_from_tube` therefore takes, for every knot with a bead ensemble and a tube
+ensemble of the same N and w ≥ d, each tube replica of the sweep (its seed) not yet seeded,
+polishes it under the bead rule (:func:`stiffknots.engine.polish.polish`: no strand passage,
+bonds and the rule held exactly), verifies its knot type and stores it in the bead ensemble
+as replica :data:`SEEDED_REPLICA` + r (r: the tube replica's number) with
+``start = "tube-ground"`` and, under ``extra``, the tube replica it came from
+(``seeded_from``) and the polish's figures. Each is one more independent search of the bead
+ensemble — a tube annealing from its own seed, then a bead-rule polish — and its verdict
+counts it like any replica (the rule of :mod:`stiffknots.sweeps.convergence`), with no Monte
+Carlo of its own. Reproducible: a seeded replica depends only on its tube replica, itself
+fixed by its key, and a stored key is never written again; a tube replica seeded under the
+older rule (only the lowest, as replica :data:`OLDER_SEEDED_REPLICA`) is not seeded twice.
 """
 
 from __future__ import annotations
@@ -35,11 +38,14 @@ from stiffknots._version import __version__
 from stiffknots.store import ReplicaKey, Store, row_from_replica, settings_hash
 from stiffknots.sweeps.models import Model
 
-__all__ = ["SEEDED_REPLICA", "SEEDED_START", "seed_from_tube", "seed_pairs"]
+__all__ = ["OLDER_SEEDED_REPLICA", "SEEDED_REPLICA", "SEEDED_START", "seed_from_tube", "seed_pairs"]
 
-#: the replica number of the seeded bead replica in its ensemble's key (above every
-#: Monte Carlo replica: a sweep adds at most :data:`stiffknots.problems.validate.MAX_REPLICAS`)
-SEEDED_REPLICA = 1_000_000
+#: the replica number of tube replica 0's seed in the bead ensemble's key (tube replica r:
+#: this + r; above every Monte Carlo replica: a sweep adds at most
+#: :data:`stiffknots.problems.validate.MAX_REPLICAS`)
+SEEDED_REPLICA = 2_000_000
+#: the replica number of the one seeded replica of the older rule (the lowest tube replica)
+OLDER_SEEDED_REPLICA = 1_000_000
 #: its ``start``
 SEEDED_START = "tube-ground"
 
@@ -72,8 +78,8 @@ def seed_pairs(models: Sequence[Model]) -> list[tuple[Model, Model]]:
 def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
                    settings: Mapping[str, Mapping[str, Any]], seed: int,
                    budget: str | None = None) -> list[dict]:
-    """Store, for every knot and :func:`seed_pairs` pair, the bead replica seeded from the
-    tube ensemble's lowest replica (module docstring); skip a key stored already.
+    """Store, for every knot and :func:`seed_pairs` pair, a bead replica seeded from each of
+    the sweep's tube replicas not yet seeded (module docstring); skip a key stored already.
 
     Parameters
     ----------
@@ -88,68 +94,76 @@ def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
     Returns
     -------
     list of dict
-        One entry per knot and pair tried: ``knot``, ``model``, ``written`` (bool),
-        ``epsilon`` (the seeded replica's, or None), ``tube_epsilon`` (its start's),
-        ``bead_epsilon`` (the bead ensemble's lowest before it, or None) and ``reason`` when
-        nothing was written.
+        One entry per tube replica seeded now: ``knot``, ``model``, ``tube_replica``,
+        ``written`` (bool), ``epsilon`` (the seeded replica's, or None), ``tube_epsilon`` (its
+        start's), ``bead_epsilon`` (the lowest of the bead ensemble's own Monte Carlo
+        replicas stored before it, or None) and ``reason`` when nothing was written.
     """
-    from stiffknots.analysis import classify
-    from stiffknots.engine.polish import polish
-    from stiffknots.knots.identify import verify_knot
-    from stiffknots.measures import min_segment_distance
-
     out = []
     for bead, tube in seed_pairs(models):
         bset = dict(settings[bead.name])
         bh, th = settings_hash(bset), settings_hash(settings[tube.name])
         for knot in knots:
-            key = ReplicaKey(knot, "bead", bead.beads, bead.thickness, int(seed),
-                             SEEDED_REPLICA, bh)
-            if store.has(key):
-                continue
-            # this sweep's tube replicas only (its seed): another sweep's would make the seed
-            # depend on which ran first
+            # this sweep's tube replicas only (its seed): another sweep's would make the bead
+            # ensemble depend on which sweep ran first
             rows = store.replicas(knot=knot, exclusion="tube", beads=tube.beads,
                                   thickness=tube.thickness, settings_hash=th, seed=int(seed))
             if not rows:
                 continue
-            low = rows[0]  # ordered by ε
-            t0, c0 = time.perf_counter(), time.process_time()
-            x = store.coords(low["id"])
-            res = polish(x, exclusion="bead", d=bead.thickness)
-            ok, found = verify_knot(res.pos, knot)
-            searched = store.replicas(knot=knot, exclusion="bead", beads=bead.beads,
-                                      thickness=bead.thickness, settings_hash=bh,
-                                      seed=int(seed))
-            entry = {"knot": knot, "model": bead.name, "tube_epsilon": low["epsilon"],
-                     "bead_epsilon": searched[0]["epsilon"] if searched else None,
-                     "epsilon": None, "written": False}
-            if not ok:  # never expected: the polish cannot pass strands (its proof)
-                entry["reason"] = (f"TopologyChangedError: the seeded chain ended as {found}; "
-                                   "not stored")
-                out.append(entry)
-                continue
-            n = len(res.pos)
-            eps = n * res.energy
-            rep = _Seeded(
-                coords=res.pos, epsilon=eps,
-                min_segment_distance=float(min_segment_distance(res.pos, True)),
-                wall_time=time.perf_counter() - t0, cpu_time=time.process_time() - c0,
-                knot_verified=True, seed=int(low.get("replica_seed") or 0),
-                seeded_from={"exclusion": "tube", "thickness": tube.thickness,
-                             "beads": tube.beads, "seed": low["seed"],
-                             "replica": low["replica"], "settings_hash": th,
-                             "epsilon": low["epsilon"], "shape": low.get("shape")},
-                polish={"epsilon_before": n * res.energy_before, "iterations": res.iterations,
-                        "converged": res.converged, "kkt_residual": res.kkt_residual,
-                        "grad_norm": res.grad_norm, "reason": res.reason})
-            shape = classify(res.pos, True, d=bead.thickness)
-            row, coords = row_from_replica(
-                rep, knot=knot, exclusion="bead", thickness=bead.thickness, seed=int(seed),
-                settings=bset, beads=bead.beads, shape=shape.label,
-                multiplicity=shape.multiplicity, problem=bset["problem"],
-                extra={"model": bead.name, "budget": budget, "width": bead.width()["text"],
-                       "shape_reason": shape.reason})
-            entry.update(epsilon=eps, written=bool(store.put(row, coords)))
-            out.append(entry)
+            beads = store.replicas(knot=knot, exclusion="bead", beads=bead.beads,
+                                   thickness=bead.thickness, settings_hash=bh, seed=int(seed))
+            done = {int(((r.get("extra") or {}).get("seeded_from") or {}).get("replica", -1))
+                    for r in beads if r["start"] == SEEDED_START}
+            searched = [r["epsilon"] for r in beads if r["start"] != SEEDED_START]
+            for low in sorted(rows, key=lambda r: r["replica"]):
+                key = ReplicaKey(knot, "bead", bead.beads, bead.thickness, int(seed),
+                                 SEEDED_REPLICA + int(low["replica"]), bh)
+                if int(low["replica"]) in done or store.has(key):
+                    continue
+                out.append(_seed_one(store, knot, bead, tube, low, key, bset, th,
+                                     min(searched, default=None), budget))
     return out
+
+
+def _seed_one(store: Store, knot: str, bead: Model, tube: Model, low: Mapping[str, Any],
+              key: ReplicaKey, bset: Mapping[str, Any], th: str, searched: float | None,
+              budget: str | None) -> dict:
+    """Polish one stored tube replica ``low`` under the bead rule, verify and store it under
+    ``key``; the entry of :func:`seed_from_tube`."""
+    from stiffknots.analysis import classify
+    from stiffknots.engine.polish import polish
+    from stiffknots.knots.identify import verify_knot
+    from stiffknots.measures import min_segment_distance
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    res = polish(store.coords(low["id"]), exclusion="bead", d=bead.thickness)
+    ok, found = verify_knot(res.pos, knot)
+    entry = {"knot": knot, "model": bead.name, "tube_replica": int(low["replica"]),
+             "tube_epsilon": low["epsilon"], "bead_epsilon": searched, "epsilon": None,
+             "written": False}
+    if not ok:  # never expected: the polish cannot pass strands (its proof)
+        entry["reason"] = (f"TopologyChangedError: the seeded chain ended as {found}; "
+                           "not stored")
+        return entry
+    n = len(res.pos)
+    eps = n * res.energy
+    rep = _Seeded(
+        coords=res.pos, epsilon=eps,
+        min_segment_distance=float(min_segment_distance(res.pos, True)),
+        wall_time=time.perf_counter() - t0, cpu_time=time.process_time() - c0,
+        knot_verified=True, seed=int(low.get("replica_seed") or 0), replica=key.replica,
+        seeded_from={"exclusion": "tube", "thickness": tube.thickness, "beads": tube.beads,
+                     "seed": low["seed"], "replica": low["replica"], "settings_hash": th,
+                     "epsilon": low["epsilon"], "shape": low.get("shape")},
+        polish={"epsilon_before": n * res.energy_before, "iterations": res.iterations,
+                "converged": res.converged, "kkt_residual": res.kkt_residual,
+                "grad_norm": res.grad_norm, "reason": res.reason})
+    shape = classify(res.pos, True, d=bead.thickness)
+    row, coords = row_from_replica(
+        rep, knot=knot, exclusion="bead", thickness=bead.thickness, seed=key.seed,
+        settings=bset, beads=bead.beads, shape=shape.label, multiplicity=shape.multiplicity,
+        problem=bset["problem"],
+        extra={"model": bead.name, "budget": budget, "width": bead.width()["text"],
+               "shape_reason": shape.reason})
+    entry.update(epsilon=eps, written=bool(store.put(row, coords)))
+    return entry

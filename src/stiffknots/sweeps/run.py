@@ -14,16 +14,19 @@ comes back to the client, which
 3. writes it to the store (:meth:`Store.put <stiffknots.store.sqlite.Store.put>`): one
    transaction per row, so a killed client leaves whole rows or none, and a row whose key is
    stored is not written again;
-4. once every ensemble of a knot has ended, seeds one more bead-rule replica from the tube
-   model's ground state (the tube chain is bead-admissible when w ≥ d; polished under the
-   bead rule, :mod:`stiffknots.sweeps.cross`), a safety net for the bead rule's glassy
-   searches.
+4. once a tube ensemble's replicas have ended, seeds a bead-rule replica from each (a tube
+   chain is bead-admissible when w ≥ d; polished under the bead rule,
+   :mod:`stiffknots.sweeps.cross`): the tube model's smoother landscape searches the bead
+   rule's glassy one better than the bead rule's own Monte Carlo does.
 
 Replicas until converged. With ``max_replicas`` above the budget's replicas, a (knot, model)
 whose replicas have all ended without a converged ground state
 (:mod:`stiffknots.sweeps.convergence`) gets ``step`` more replicas (the budget's moves and
 settings: the same ensemble), and so on up to ``max_replicas``; the n = i knots, whose
-circular braids two replicas agree on at once, then cost no more than they need.
+circular braids two replicas agree on at once, then cost no more than they need. A bead
+ensemble that tube replicas seed is judged once its tube ensembles have settled and been
+seeded, since its verdict counts the seeded replicas; meanwhile the workers go on with the
+next jobs.
 
 Interruption and resumption. Ctrl-C (KeyboardInterrupt) stops the sweep: the results that
 have already arrived are stored, the running jobs are cancelled, the cluster is closed and the
@@ -53,7 +56,7 @@ from stiffknots.sweeps.cluster import (
     scheduler_address,
 )
 from stiffknots.sweeps.convergence import ensemble_converged as converged_with_every_start
-from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube
+from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube, seed_pairs
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import (
     SweepJob,
@@ -317,38 +320,66 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         listener.expected(expected_todo(groups, res.todo, budget.replicas),
                           sum(1 for g in groups.values() if g["settled"]))
 
+    settings = {m.name: sweep_settings(m, budget) for m in res.models}
+    # bead model → the tube models whose replicas seed it (:mod:`stiffknots.sweeps.cross`)
+    tubes_of: dict[str, list[str]] = {}
+    for b, t in seed_pairs(res.models):
+        tubes_of.setdefault(b.name, []).append(t.name)
+    early: list[dict] = []  # seeded before the listener was told the plan
+
+    def seed_knot(knot: str) -> None:
+        """Seed the knot's bead ensembles from its tube replicas that have ended
+        (:mod:`stiffknots.sweeps.cross`; those seeded already are skipped)."""
+        if not run or res.interrupted or not tubes_of:
+            return
+        for e in seed_from_tube(store, [knot], res.models, settings, res.seed, budget.name):
+            if e["written"]:
+                res.seeded.append(e)
+                if not started:
+                    early.append(e)
+                else:
+                    listener.seeded(e)
+            elif e.get("reason"):
+                res.failed.append({"job": f"{knot}/{e['model']}/{SEEDED_START}",
+                                   "error": e["reason"]})
+
+    def decide(g: dict) -> list[SweepJob]:
+        """The jobs to add to a (knot, model) whose replicas have all ended. A bead ensemble
+        that tube replicas seed waits for them: its verdict counts the seeded replicas, so it
+        is judged only once its tube ensembles have settled (and have been seeded); the
+        settling of a tube ensemble judges the bead ensembles waiting on it."""
+        tubes = [groups[(g["knot"], t)] for t in tubes_of.get(g["model"].name, ())]
+        if any(not t["settled"] for t in tubes):
+            g["waiting"] = True
+            return []
+        g["waiting"] = False
+        new = extend(g)
+        if g["settled"] and g["model"].exclusion == "tube":
+            seed_knot(g["knot"])
+            for b in groups.values():
+                if b["knot"] == g["knot"] and b.get("waiting") and b["open"] == 0:
+                    new += decide(b)
+        elif g["model"].exclusion == "tube":
+            seed_knot(g["knot"])  # its replicas so far: the bead verdict will count them
+        return new
+
+    started = False
     # replicas added to a (knot, model) run before the jobs of later knots, so that the knots
     # are finished in the order planned: a sweep stopped after an hour has whole answers for
     # the knots it reached, not two replicas of every knot (the results do not depend on the
     # order: every replica's seed and settings are its key's)
     feed: deque[SweepJob] = deque(todo)
     for g in reversed(list(groups.values())):
-        if g["open"] == 0:
-            feed.extendleft(reversed(extend(g)))
+        if g["open"] == 0 and not g["settled"] and not g.get("waiting"):
+            feed.extendleft(reversed(decide(g)))
     listener.started(res)
+    started = True
+    for e in early:
+        listener.seeded(e)
     expect()
     if not run:
         res.wall_seconds = time.perf_counter() - t0
         return res
-    settings = {m.name: sweep_settings(m, budget) for m in res.models}
-    seeded_knots: set[str] = set()
-
-    def seed_knot(knot: str) -> None:
-        """Seed the knot's bead ensemble from its tube ground (:mod:`stiffknots.sweeps.cross`)
-        once every ensemble of the knot has ended, none with a failed job: the seed is then
-        the tube ensemble's final lowest replica, as a rerun would find it."""
-        if knot in seeded_knots or res.interrupted \
-                or any(f["job"].split("/")[0] == knot for f in res.failed) \
-                or not all(groups[(knot, m.name)]["settled"] for m in res.models):
-            return
-        seeded_knots.add(knot)
-        for e in seed_from_tube(store, [knot], res.models, settings, res.seed, budget.name):
-            if e["written"]:
-                res.seeded.append(e)
-                listener.seeded(e)
-            elif e.get("reason"):
-                res.failed.append({"job": f"{knot}/{e['model']}/{SEEDED_START}",
-                                   "error": e["reason"]})
 
     if feed:
         with connect(scheduler, workers) as client:
@@ -402,12 +433,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                             res.cpu_seconds += float(r.cpu_time or 0.0)
                             listener.finished(sj, row, None)
                 if g["open"] == 0 and not res.interrupted:
-                    new = extend(g)
+                    new = decide(g)
                     if new:
                         feed.extendleft(reversed(new))
                         listener.added(len(new))
-                    else:
-                        seed_knot(sj.knot)
                     expect()
 
             try:
@@ -423,7 +452,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                 futures = [f for _, f in inflight.values()]
                 if futures:
                     client.cancel(futures)
-    for k in res.knots:  # those settled before this sweep (a resumed or older sweep)
+    for k in res.knots:  # tube replicas stored before this sweep and not yet seeded
         seed_knot(k)
     res.wall_seconds = time.perf_counter() - t0
     return res
