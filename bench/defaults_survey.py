@@ -27,6 +27,7 @@ def _replica(r: dict) -> dict:
     obs = r.get("observables") or {}
     return {"replica": r.get("replica"), "lineage": r.get("lineage"), "leg": r.get("leg"),
             "start": r.get("start"), "epsilon": r.get("epsilon"), "shape": obs.get("label"),
+            "search": obs.get("search"),
             "wall_s": r.get("wall_time"), "cpu_s": r.get("cpu_time")}
 
 

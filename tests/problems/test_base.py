@@ -227,3 +227,66 @@ def test_a_replicas_time_counts_its_polish_and_knot_check():
     assert pol > 0 and r.wall_time >= mc + pol
     assert r.cpu_time >= 0.5 * (mc + pol)  # CPU: the same work on one core (a loaded machine
     # only adds wall time)
+
+
+def test_bead_rule_searches_after_the_first_round_take_the_tube_route():
+    """From the second round on, a bead-rule run's new searches anneal under the tube rule of
+    diameter w = d and are polished under the bead rule (problems.closed.TUBE_ROUTE_FROM);
+    the first round, a tube-rule run, a run without the polish or with tube_route=False do
+    not; the settings say so."""
+    from stiffknots.problems.closed import TUBE_ROUTE_FROM, ClosedAnneal
+
+    assert TUBE_ROUTE_FROM == 1
+    p = ClosedAnneal("5_2", moves=1_000, replicas=2)
+    bead = p.settings.params
+    for j in p.jobs(first=0):
+        assert j.settings.params.exclusion == "bead" and j.polish_params is None
+        assert j.search is None
+    for first in (2, 4):
+        for j in p.jobs(first=first):
+            q = j.settings.params
+            assert (q.exclusion, q.w) == ("tube", bead.d)
+            assert j.polish_params == bead and "tube rule" in j.search
+            assert j.settings.moves == p.settings.moves
+            assert j.settings.schedule == p.settings.schedule
+    assert p.settings_dict()["tube_route_from_round"] == 2
+    from stiffknots.engine.params import MoveParams
+
+    for q in (ClosedAnneal("5_2", moves=1_000, replicas=2, tube_route=False),
+              ClosedAnneal("5_2", moves=1_000, replicas=2, polish=False),
+              ClosedAnneal("5_2", moves=1_000, replicas=2,
+                           params=MoveParams(exclusion="tube"))):
+        assert all(j.polish_params is None for j in q.jobs(first=2))
+        assert "tube_route_from_round" not in q.settings_dict()
+
+
+def test_a_tube_route_replica_ends_bead_admissible_polished_and_verified():
+    """A tube-route job: its Monte Carlo holds the tube rule, its polish the bead rule; the
+    replica ends with unit bonds, no two beads at index distance ≥ 2 closer than d, its knot
+    verified, ε at or below its tube chain's and recomputed from its coordinates."""
+    from stiffknots.engine.kernel import energy_chain
+    from stiffknots.knots.identify import verify_knot
+    from stiffknots.problems.base import run_job
+    from stiffknots.problems.closed import ClosedAnneal
+
+    p = ClosedAnneal("4_1", moves=200_000, replicas=2, seed=3)
+    (job, _) = p.jobs(first=2)
+    r = run_job(job)
+    y = r.coords
+    n = len(y)
+    assert r.knot_verified and verify_knot(y, "4_1")[0]
+    assert r.observables["search"] == job.search
+    bonds = np.linalg.norm(np.roll(y, -1, axis=0) - y, axis=1)
+    assert np.max(np.abs(bonds - 1)) < 1e-10
+    dist = np.linalg.norm(y[:, None] - y[None], axis=2)
+    sep = np.abs(np.arange(n)[:, None] - np.arange(n)[None])
+    sep = np.minimum(sep, n - sep)
+    d = p.settings.params.d
+    assert dist[sep >= 2].min() >= d - 1e-10
+    assert r.exclusion_margin >= -1e-10
+    assert r.epsilon == pytest.approx(n * energy_chain(y, False), rel=1e-12)
+    assert r.epsilon <= r.polish["epsilon_before"] + 1e-9
+    # polished under the bead rule, not the tube's: strands press between beads, closer than
+    # the tube would allow (0.263 here; the same job polished under the tube rule ends at
+    # exactly w = d, 0.70711, and ε 128.565 against 127.573)
+    assert r.min_segment_distance < d - 0.1

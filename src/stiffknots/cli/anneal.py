@@ -88,6 +88,11 @@ def anneal(
     resume: ResumeOpt = False,
     start: StartOpt = "all",
     polish: PolishOpt = True,
+    tube_route: Annotated[bool, typer.Option(
+        "--tube-route/--no-tube-route",
+        help="Bead rule: new searches from the second round on anneal under the tube rule "
+             "(w = d, whose chains the bead rule admits) and are then polished under the "
+             "bead rule — the bead rule's own Monte Carlo is glassy.")] = True,
     from_file: Annotated[str | None, typer.Option(
         "--from", help="Start every replica from the curve in this file (any format of "
                        "`stiffknots identify`; resampled to --beads unit bonds, knot type "
@@ -161,7 +166,7 @@ def anneal(
         problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                                schedule=sch, params=params, checkpoint_dir=checkpoint,
                                resume=resume, start=start, rounds=rounds, initial=initial,
-                               polish=polish)
+                               polish=polish, tube_route=tube_route)
         if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
             # (the rounds that start new searches; a continuation's start is known only then)
             for rnd in range(min(rounds, problem.fresh_rounds)):
@@ -190,11 +195,16 @@ def anneal(
     for col in ("replica", "start", "ε", "shape", "knot", "min seg dist", "acc single",
                 "acc multi", "s"):
         t.add_column(col, justify="right", no_wrap=col in ("replica", "ε"))
-    legs = any(r.leg for r in res.replicas)
-    if legs:
-        t.caption = "↳k: basin hops that continue the search of replica k"
+    notes = []
+    if any(r.leg for r in res.replicas):
+        notes.append("↳k: basin hops that continue the search of replica k")
+    if any(r.observables.get("search") for r in res.replicas):
+        notes.append("ᵗ: annealed under the tube rule w = d, polished under the bead rule")
+    t.caption = "; ".join(notes) or None
     for r in res.replicas:
-        t.add_row(str(r.replica), f"↳{r.lineage}" if r.leg else str(r.start), f"{r.epsilon:.4f}",
+        tag = "ᵗ" if r.observables.get("search") else ""
+        t.add_row(str(r.replica), f"↳{r.lineage}" if r.leg else f"{r.start}{tag}",
+                  f"{r.epsilon:.4f}",
                   r.observables["shape"],
                   escape(str(r.knot)) + (" ✓" if r.knot_verified else " ✗"),
                   f"{r.min_segment_distance:.3f}", f"{r.acceptance['single']['rate']:.3f}",

@@ -117,6 +117,12 @@ class Job:
     checkpoint_seconds: float | None = None
     lineage: int | None = None  # the search it continues (None: a new one, its own index)
     leg: int = 0  # continuation legs of that search before this one
+    #: the exclusion of the final minimiser where it is not the Monte Carlo's: a bead-rule
+    #: search annealed under the tube rule (w = d), whose chains the bead rule admits
+    #: (:data:`stiffknots.problems.closed.TUBE_ROUTE_FROM`); None: ``settings.params``
+    polish_params: Any = None
+    #: how the search ran, when not plainly (kept in the replica's ``observables["search"]``)
+    search: str | None = None
 
 
 DEFAULT_MOVES = AnnealSettings.moves  # 15 M at N = 150: relaxation + annealing (schedules.py)
@@ -213,7 +219,8 @@ def run_job(job: Job) -> Replica:
     else:
         raw = run_replica(job.coords, job.settings, job.seed, job.replica, progress=report, **kw)
     wall0, cpu0 = time.perf_counter(), time.process_time()  # after the Monte Carlo
-    fields, info = polish_run(vars(raw), job.settings) if job.polish else (vars(raw), None)
+    fields, info = (polish_run(vars(raw), job.settings, job.polish_params) if job.polish
+                    else (vars(raw), None))
     code = knot_code(fields["coords"], job.settings.closed)
     ok = code == job.start_code
     found = job.knot if ok else identify_code(code)
@@ -228,12 +235,16 @@ def run_job(job: Job) -> Replica:
                   cpu_time=(raw.cpu_time or 0.0) + time.process_time() - cpu0)
     return Replica(**fields, knot=found, knot_verified=ok, start=job.start,
                    lineage=job.replica if job.lineage is None else job.lineage, leg=job.leg,
-                   knot_check=check, polish=info)
+                   knot_check=check, polish=info,
+                   observables={"search": job.search} if job.search else {})
 
 
-def polish_run(fields: dict, settings: AnnealSettings) -> tuple[dict, dict | None]:
+def polish_run(fields: dict, settings: AnnealSettings, params: Any = None
+               ) -> tuple[dict, dict | None]:
     """The numbers of a run after the final minimiser (:func:`stiffknots.engine.polish.polish`)
-    took its best chain to the local minimum; and what the minimiser did.
+    took its best chain to the local minimum; and what the minimiser did. ``params``: the
+    exclusion the minimiser holds (default the run's, ``settings.params``; a tube-route
+    search of a bead-rule problem passes the bead rule).
 
     Every number that depends on the chain is recomputed from the polished coordinates (the
     energy from scratch), so the verification that follows applies to the polished chain.
@@ -248,7 +259,7 @@ def polish_run(fields: dict, settings: AnnealSettings) -> tuple[dict, dict | Non
 
     if not polishable(settings):
         return fields, None
-    p = settings.params
+    p = settings.params if params is None else params
     closed = settings.closed
     res = polish(fields["coords"], closed=closed, exclusion=p.exclusion, d=p.d, w=p.w)
     x = res.pos
@@ -462,15 +473,16 @@ class Problem:
                       start: Callable[[int], str], code: Callable[[int], str],
                       checkpoint_dir=None, resume: bool = False,
                       checkpoint_seconds: float | None = None, first: int = 0,
-                      count: int | None = None) -> list[Job]:
+                      count: int | None = None, polish_params: Any = None,
+                      search: str | None = None) -> list[Job]:
         """One job per replica ``first`` … ``first + count − 1`` (``count``: default
         ``replicas``); replica r's seed is the r-th seed derived from the problem's seed,
-        whatever the round it runs in."""
+        whatever the round it runs in. ``polish_params``, ``search``: see :class:`Job`."""
         n = self.replicas if count is None else count
         seeds = replica_seeds(self.seed, first + n)
         return [Job(replica=r, seed=seeds[r], coords=coords(r), settings=settings,
                     knot=self.knot_name, start=start(r), start_code=code(r),
-                    polish=self.polish,
+                    polish=self.polish, polish_params=polish_params, search=search,
                     checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
                                 if checkpoint_dir is not None else None),
                     resume=resume, checkpoint_seconds=checkpoint_seconds)

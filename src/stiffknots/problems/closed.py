@@ -35,6 +35,17 @@ DEFAULT_ROUNDS = 8  # rounds of replicas until the lowest state is reached by tw
 LEG_HOPS = 8
 #: … of this fraction of a replica's moves in all (12 M of the default 15 M at N = 150)
 LEG_FRACTION = 0.8
+#: Tube-route searches of the bead rule: in a bead-rule run, the new searches of this round
+#: on (0-based; the second) anneal under the tube rule of diameter w = d and are then polished
+#: under the bead rule. A tube chain of w ≥ d is bead-admissible (beads at index distance
+#: ≥ 2 begin or end segments that share no bead, at least w apart: proof in
+#: :mod:`stiffknots.sweeps.cross`), so such a search is a search of the bead rule's
+#: landscape through the tube's smoother one: the bead rule's many contact registries make its
+#: own Monte Carlo glassy (on 10_1 … 10_8, tube annealings then bead polishes were the lowest
+#: bead states of 7 of 8 knots and agreed two by two on 5; bench/RESULTS.md, 2026-12-03,
+#: third session). The first round stays the bead rule's own: most knots through 7 crossings
+#: converge in it.
+TUBE_ROUTE_FROM = 1
 
 
 @dataclass
@@ -81,7 +92,8 @@ class ClosedAnneal(Problem):
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0,
                  start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
-                 agree: int = 2, rel_tol: float = 1e-3, initial=None, polish: bool = True):
+                 agree: int = 2, rel_tol: float = 1e-3, initial=None, polish: bool = True,
+                 tube_route: bool = True):
         from stiffknots.theory.bounds import closed_bounds
 
         if initial is not None:  # a curve of the user: named, resampled and checked first
@@ -109,6 +121,15 @@ class ClosedAnneal(Problem):
                                        target_epsilon=target_epsilon)
         self.settings.validate()
         self.settings.params.validate(self.beads)
+        #: the settings of the tube-route searches (:data:`TUBE_ROUTE_FROM`), None without
+        self.tube_settings = None
+        p = self.settings.params
+        if tube_route and p.exclusion == "bead" and self.polish:
+            from dataclasses import replace
+
+            self.tube_settings = replace(self.settings,
+                                         params=replace(p, exclusion="tube", w=p.d))
+            self.tube_settings.params.validate(self.beads)
         if initial is None:
             self._closed_starts(start)
             self.adaptive_starts = isinstance(start, str) and start == "all"
@@ -124,10 +145,18 @@ class ClosedAnneal(Problem):
         self._bounds = closed_bounds(self.knot.bridge_number, self.knot.braid_index)
 
     def jobs(self, first: int = 0) -> list[Job]:
-        return self._replica_jobs(self.settings, lambda r: self.chains[self._start(r)],
-                                  self._start, lambda r: self.codes[self._start(r)],
-                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds,
-                                  first)
+        """The replicas ``first`` … of one round; from round :data:`TUBE_ROUTE_FROM` on, a
+        bead-rule run's new searches take the tube route."""
+        route = (self.tube_settings is not None
+                 and first >= TUBE_ROUTE_FROM * self.replicas)
+        p = self.settings.params
+        return self._replica_jobs(
+            self.tube_settings if route else self.settings,
+            lambda r: self.chains[self._start(r)], self._start,
+            lambda r: self.codes[self._start(r)], self.checkpoint_dir, self.resume,
+            self.checkpoint_seconds, first, polish_params=p if route else None,
+            search=(f"tube rule w = {p.d:.6g}, then polished under the bead rule" if route
+                    else None))
 
     def continue_jobs(self, parents: list[Replica], first: int) -> list[Job] | None:
         """Continue each parent's search by :data:`LEG_HOPS` basin hops from its (polished)
@@ -163,7 +192,10 @@ class ClosedAnneal(Problem):
         return {"lower": b.lower, "upper": b.upper, "attained_by": b.attained_by}
 
     def settings_dict(self) -> dict:
-        return {**self.settings.as_dict(), "start": self.starts, "polish": self.polish}
+        d = {**self.settings.as_dict(), "start": self.starts, "polish": self.polish}
+        if self.tube_settings is not None:
+            d["tube_route_from_round"] = TUBE_ROUTE_FROM + 1  # 1-based, as the report counts
+        return d
 
     def result_fields(self, replicas) -> dict:
         from stiffknots.engine.params import width_of
@@ -194,6 +226,7 @@ def anneal(
     on_progress: Callable[[dict], None] | None = None,
     initial=None,
     polish: bool = True,
+    tube_route: bool = True,
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -240,6 +273,10 @@ def anneal(
     polish : take every replica's best chain to its local minimum with the final minimiser
         (:func:`stiffknots.engine.polish.polish`; unit bonds and exclusion held exactly, no
         strand passage); its report is in each replica's ``polish``.
+    tube_route : in a bead-rule run (with ``polish``), the new searches from the second round
+        on anneal under the tube rule of diameter w = d and are polished under the bead rule
+        (:data:`TUBE_ROUTE_FROM`; each such replica says so in ``observables["search"]``);
+        False: every search is the bead rule's own Monte Carlo.
 
     Returns
     -------
@@ -257,6 +294,7 @@ def anneal(
                            quench_fraction=quench_fraction, target_epsilon=target_epsilon,
                            checkpoint_dir=checkpoint_dir, resume=resume,
                            checkpoint_seconds=checkpoint_seconds, start=start, rounds=rounds,
-                           agree=agree, rel_tol=rel_tol, initial=initial, polish=polish)
+                           agree=agree, rel_tol=rel_tol, initial=initial, polish=polish,
+                           tube_route=tube_route)
     return solve(problem, workers=workers, on_replica_done=on_replica_done,
                  on_progress=on_progress)

@@ -251,7 +251,8 @@ def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
         starts = [start] * budget.replicas
     problem = ClosedAnneal(k.name, beads=model.beads, moves=budget.moves,
                            replicas=budget.replicas, seed=seed, params=model.params(),
-                           start=starts, rounds=1, polish=settings.get("polish", True))
+                           start=starts, rounds=1, polish=settings.get("polish", True),
+                           tube_route=False)  # a sweep seeds its bead ensembles instead
     mine = {key: v for key, v in settings.items()
             if key not in ("problem", "start", "polish")}
     if canonical_json(problem.settings.as_dict()) != canonical_json(mine):
