@@ -363,13 +363,13 @@ def test_progress_lines_where_stderr_is_not_a_terminal():
                      {"shape": "CB", "multiplicity": 2, "epsilon": 79.0182}, None)
         bar.added(2)
         bar.finished(SimpleNamespace(id="4_1/bead/r0"), None, "boom")
-        bar.seeded({"knot": "4_1", "model": "bead", "epsilon": 127.4567})
+        bar.seeded({"knot": "4_1", "model": "bead", "epsilon": 127.4567, "tube_replica": 1})
     lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
     assert lines[0] == "1 of 4 jobs already stored: skipped"
     # nothing settled yet: the time left counts the plan alone, and says it is a lower bound
     assert " 1/3 jobs, 0:00:00 elapsed, ETA ≥ 0:00:00 — 3_1/bead/r1: ε = 79.02 CB(i=2)" in lines[1]
     assert " 2/5 jobs, " in lines[2] and lines[2].endswith("4_1/bead/r0: failed")
-    assert lines[3].endswith("4_1/bead: seeded from the tube ground, ε = 127.46")
+    assert lines[3].endswith("4_1/bead: seeded from tube replica 1, ε = 127.46")
     assert len(lines) == 4
     # with --json nothing at all; on a terminal the bar, not the lines
     quiet = io.StringIO()

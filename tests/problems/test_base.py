@@ -50,6 +50,23 @@ def test_verdict_counts_the_lowest_state_only():
     assert verdict(rule, []) == (False, "no replica finished")
 
 
+def test_tube_route_searches_confirm_but_do_not_certify():
+    # two tube-route searches agreeing on the lowest state: no verdict (they share a tube
+    # funnel; 7_5 and 6_3 "converged" above the bead rule's own lowest that way); one of them
+    # with a search of the bead rule's own: converged; a leg continuing a tube-route search
+    # belongs to it and does not make it the bead rule's own
+    rule = _Rule()
+    t1, t2 = _r("80", 163.71), _r("80", 163.72)
+    t1.observables["search"] = t2.observables["search"] = "tube rule w = 0.707107, ..."
+    ok, why = verdict(rule, [t1, t2, _r("80", 165.0)])
+    assert not ok and "tube-route" in why and "2 of 3" in why
+    ok, why = verdict(rule, [t1, _r("80", 163.75), _r("80", 165.0)])
+    assert ok and "2 of 3" in why
+    leg = _r("80", 163.70, lineage=t1.replica, leg=1)
+    ok, _ = verdict(rule, [t1, t2, leg])
+    assert not ok
+
+
 def test_no_verdict_before_every_default_start_had_a_search():
     # braid and cage agreeing is no verdict while the 80 — a hypothesis for the ground state
     # of its own (§VII) — has not been tried: on 4_1 it holds the lower states
@@ -229,34 +246,34 @@ def test_a_replicas_time_counts_its_polish_and_knot_check():
     # only adds wall time)
 
 
-def test_bead_rule_searches_after_the_first_round_take_the_tube_route():
-    """From the second round on, a bead-rule run's new searches anneal under the tube rule of
+def test_bead_rule_searches_after_the_fresh_rounds_take_the_tube_route():
+    """From the third round on, a bead-rule run's new searches anneal under the tube rule of
     diameter w = d and are polished under the bead rule (problems.closed.TUBE_ROUTE_FROM);
-    the first round, a tube-rule run, a run without the polish or with tube_route=False do
+    the fresh rounds, a tube-rule run, a run without the polish or with tube_route=False do
     not; the settings say so."""
     from stiffknots.problems.closed import TUBE_ROUTE_FROM, ClosedAnneal
 
-    assert TUBE_ROUTE_FROM == 1
     p = ClosedAnneal("5_2", moves=1_000, replicas=2)
+    assert TUBE_ROUTE_FROM == p.fresh_rounds == 2
     bead = p.settings.params
-    for j in p.jobs(first=0):
+    for j in p.jobs(first=0) + p.jobs(first=2):
         assert j.settings.params.exclusion == "bead" and j.polish_params is None
         assert j.search is None
-    for first in (2, 4):
+    for first in (4, 6):
         for j in p.jobs(first=first):
             q = j.settings.params
             assert (q.exclusion, q.w) == ("tube", bead.d)
             assert j.polish_params == bead and "tube rule" in j.search
             assert j.settings.moves == p.settings.moves
             assert j.settings.schedule == p.settings.schedule
-    assert p.settings_dict()["tube_route_from_round"] == 2
+    assert p.settings_dict()["tube_route_from_round"] == 3
     from stiffknots.engine.params import MoveParams
 
     for q in (ClosedAnneal("5_2", moves=1_000, replicas=2, tube_route=False),
               ClosedAnneal("5_2", moves=1_000, replicas=2, polish=False),
               ClosedAnneal("5_2", moves=1_000, replicas=2,
                            params=MoveParams(exclusion="tube"))):
-        assert all(j.polish_params is None for j in q.jobs(first=2))
+        assert all(j.polish_params is None for j in q.jobs(first=4))
         assert "tube_route_from_round" not in q.settings_dict()
 
 
@@ -270,7 +287,7 @@ def test_a_tube_route_replica_ends_bead_admissible_polished_and_verified():
     from stiffknots.problems.closed import ClosedAnneal
 
     p = ClosedAnneal("4_1", moves=200_000, replicas=2, seed=3)
-    (job, _) = p.jobs(first=2)
+    (job, _) = p.jobs(first=4)
     r = run_job(job)
     y = r.coords
     n = len(y)
@@ -287,6 +304,6 @@ def test_a_tube_route_replica_ends_bead_admissible_polished_and_verified():
     assert r.epsilon == pytest.approx(n * energy_chain(y, False), rel=1e-12)
     assert r.epsilon <= r.polish["epsilon_before"] + 1e-9
     # polished under the bead rule, not the tube's: strands press between beads, closer than
-    # the tube would allow (0.263 here; the same job polished under the tube rule ends at
-    # exactly w = d, 0.70711, and ε 128.565 against 127.573)
+    # the tube would allow (0.488 here; the same job polished under the tube rule ends at
+    # exactly w = d, 0.70711, and ε 129.312 against 128.459)
     assert r.min_segment_distance < d - 0.1

@@ -1,4 +1,4 @@
-"""The bead replica seeded from the tube ground (stiffknots.sweeps.cross)."""
+"""Bead replicas seeded from the tube replicas (stiffknots.sweeps.cross)."""
 
 from __future__ import annotations
 

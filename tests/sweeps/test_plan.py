@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -202,6 +203,47 @@ def test_convergence_rule():
     assert not is_converged({"count": 3, "epsilon": 100.0, "eps_all": [100.0, 100.12, 100.5]})
     with pytest.raises(ValueError, match="eps_all or eps_max"):
         is_converged({"count": 3, "epsilon": 100.0})  # the spread unknown: no verdict
+
+
+def test_seeded_replicas_confirm_a_ground_state_but_do_not_certify_it(tmp_path):
+    """Two bead replicas seeded from tube replicas agreeing on the lowest state do not make
+    it converged (they share the tube's funnel: 10_5, 7_5, 6_3 in bench/RESULTS.md); one
+    seeded replica and one of the ensemble's own searches do. Through the store's states."""
+    from stiffknots.sweeps.convergence import SEEDED_START, own_hits
+    from stiffknots.sweeps.cross import SEEDED_START as CROSS_START
+
+    assert SEEDED_START == CROSS_START == "tube-ground"
+    seeded = {"epsilon": 100.0, "eps_all": [100.0, 100.05],
+              "eps_by_start": {SEEDED_START: [100.0, 100.05]}}
+    assert hits(seeded) == 2 and own_hits(seeded) == 0 and not is_converged(seeded)
+    mixed = {"epsilon": 100.0, "eps_all": [100.0, 100.05, 100.5],
+             "eps_by_start": {SEEDED_START: [100.0], "braid": [100.05, 100.5]}}
+    assert hits(mixed) == 2 and own_hits(mixed) == 1 and is_converged(mixed)
+    far = {"epsilon": 100.0, "eps_all": [100.0, 100.05, 100.5],
+           "eps_by_start": {SEEDED_START: [100.0, 100.05], "braid": [100.5]}}
+    assert own_hits(far) == 0 and not is_converged(far)  # the own search 0.5 % above
+    x = np.load(Path(__file__).resolve().parent.parent / "data" / "analysis"
+                / "3_1_seed1_r0.npy")
+    with Store(tmp_path / "s.db") as st:
+        for replica, start, eps in ((0, "braid", 79.30), (2_000_000, SEEDED_START, 79.0),
+                                    (2_000_001, SEEDED_START, 79.01)):
+            st.put({"knot": "3_1", "exclusion": "bead", "beads": 150, "thickness": 0.7,
+                    "seed": 0, "replica": replica, "settings": {"problem": "anneal", "s": 1},
+                    "problem": "anneal",
+                    "epsilon": eps, "shape": "CB", "multiplicity": 2, "start": start,
+                    "knot_verified": True, "min_segment_distance": 0.7,
+                    "wall_seconds": 1.0}, x)
+        ground = st.states("3_1")["ground"]
+        assert ground["eps_by_start"] == {SEEDED_START: [79.0, 79.01], "braid": [79.30]}
+        assert hits(ground) == 2 and not is_converged(ground)
+        (row,) = st.ground_states()
+        assert row["eps_by_start"] == ground["eps_by_start"] and not is_converged(row)
+        st.put({"knot": "3_1", "exclusion": "bead", "beads": 150, "thickness": 0.7,
+                "seed": 0, "replica": 1, "settings": {"problem": "anneal", "s": 1},
+                "problem": "anneal",
+                "epsilon": 79.02, "shape": "CB", "multiplicity": 2, "start": "braid",
+                "knot_verified": True, "min_segment_distance": 0.7, "wall_seconds": 1.0}, x)
+        assert is_converged(st.states("3_1")["ground"])
 
 
 def test_model_validation():

@@ -90,7 +90,7 @@ def anneal(
     polish: PolishOpt = True,
     tube_route: Annotated[bool, typer.Option(
         "--tube-route/--no-tube-route",
-        help="Bead rule: new searches from the second round on anneal under the tube rule "
+        help="Bead rule: new searches from the third round on anneal under the tube rule "
              "(w = d, whose chains the bead rule admits) and are then polished under the "
              "bead rule — the bead rule's own Monte Carlo is glassy.")] = True,
     from_file: Annotated[str | None, typer.Option(

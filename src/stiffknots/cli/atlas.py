@@ -135,8 +135,8 @@ class SweepProgress:
 
     def seeded(self, entry: dict) -> None:
         with self.lock:
-            last = (f"{entry['knot']}/{entry['model']}: seeded from the tube ground, "
-                    f"ε = {entry['epsilon']:.2f}")
+            last = (f"{entry['knot']}/{entry['model']}: seeded from tube replica "
+                    f"{entry.get('tube_replica', '?')}, ε = {entry['epsilon']:.2f}")
             self._update(escape(last))
             if self.log_lines:
                 self.progress.console.print(f"{time.strftime('%H:%M:%S')} {last}",
@@ -308,11 +308,12 @@ def _print(d: dict, mods) -> None:
                       f"{e['bead_above_tube']['tube']:.2f}" for e in missed),
                   highlight=False, markup=False)
     if sw.get("seeded"):
-        below = [e["knot"] for e in sw["seeded"]
-                 if e["bead_epsilon"] is None or e["epsilon"] < e["bead_epsilon"]]
-        out.print(f"{len(sw['seeded'])} bead-rule replicas seeded from the tube grounds (each "
-                  f"polished under the bead rule: start 'tube-ground'); below every bead "
-                  f"search: {', '.join(below) or 'none'}", highlight=False, markup=False)
+        below = dict.fromkeys(e["knot"] for e in sw["seeded"]
+                              if e["bead_epsilon"] is None or e["epsilon"] < e["bead_epsilon"])
+        out.print(f"{len(sw['seeded'])} bead-rule replicas seeded from the tube replicas (each "
+                  f"polished under the bead rule: start 'tube-ground'); one below every bead "
+                  f"search of its own: {', '.join(below) or 'none'}", highlight=False,
+                  markup=False)
     added = f", {sw['added']} added until converged" if sw["added"] else ""
     left = f", {sw['left']} not run" if sw["left"] else ""
     out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}"

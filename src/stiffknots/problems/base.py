@@ -542,6 +542,13 @@ def untried_starts(problem: Problem, replicas: list[Replica]) -> list[str]:
     return [s for s in dict.fromkeys(getattr(problem, "starts", ())) if s not in tried]
 
 
+def tube_route_lineages(replicas: list[Replica]) -> set[int]:
+    """The searches (lineages) that began as tube-route searches of a bead-rule run
+    (:data:`stiffknots.problems.closed.TUBE_ROUTE_FROM`: their first replica's
+    ``observables["search"]``), legs that continued them included."""
+    return {lineage_of(r) for r in replicas if r.leg == 0 and r.observables.get("search")}
+
+
 def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
     """Has the search converged? True when the lowest state — the best replica's shape, and a
     value within ``problem.rel_tol`` of the lowest — was reached by at least
@@ -558,17 +565,32 @@ def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
     two replicas a round the first round of a knot with three starts tries two; measured on
     4_1 (bead rule, N = 150): braid and cage agreed at the cage's 128.384 after one round
     ("converged"), while six 10⁶-move searches from the 80 all ended lower, at
-    127.43–128.27 (bench/RESULTS.md, 2026-12-03)."""
+    127.43–128.27 (bench/RESULTS.md, 2026-12-03).
+
+    Tube-route searches (:func:`tube_route_lineages`) confirm a state but do not certify it:
+    at least one of the searches that reached it must be the bead rule's own. Two tube-route
+    searches agree easily on the bead minimum below one tube funnel while the bead rule's own
+    searches go lower: counted like the others, they "converged" 7_5 at 183.65 and 6_3 at
+    163.71, whose bead searches reach 176.98 and 160.50 (bench/RESULTS.md, 2026-12-03, third
+    session)."""
     if not replicas:
         return False, "no replica finished"
     bests = lineage_bests(problem, replicas)
     states = [problem.state_of(r) for r in bests]
     label, value = states[0]
     tol = problem.rel_tol * max(abs(value), 1e-300)
-    hits = sum(1 for lab, v in states if lab == label and v - value <= tol)
+    hit = [lab == label and v - value <= tol for lab, v in states]
+    hits = sum(hit)
     name = f"{label}, {value:.6g}" if label else f"{value:.6g}"
     of = (f"{len(bests)} independent searches ({len(replicas)} replicas)"
           if len(bests) < len(replicas) else f"{len(replicas)} replicas")
+    routed = tube_route_lineages(replicas)
+    own = sum(1 for h, r in zip(hit, bests, strict=True) if h and lineage_of(r) not in routed)
+    if hits >= problem.agree and not own:
+        return False, (f"the lowest state ({name}) was reached by {hits} of {of} "
+                       f"(within {problem.rel_tol:.0e}), all of them tube-route searches: they "
+                       "share the tube rule's funnels, so a search of the bead rule's own must "
+                       "reach it too")
     untried = untried_starts(problem, replicas)
     if hits >= problem.agree and untried:
         k = len(dict.fromkeys(problem.starts))

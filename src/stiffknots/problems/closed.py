@@ -36,16 +36,18 @@ LEG_HOPS = 8
 #: … of this fraction of a replica's moves in all (12 M of the default 15 M at N = 150)
 LEG_FRACTION = 0.8
 #: Tube-route searches of the bead rule: in a bead-rule run, the new searches of this round
-#: on (0-based; the second) anneal under the tube rule of diameter w = d and are then polished
-#: under the bead rule. A tube chain of w ≥ d is bead-admissible (beads at index distance
-#: ≥ 2 begin or end segments that share no bead, at least w apart: proof in
-#: :mod:`stiffknots.sweeps.cross`), so such a search is a search of the bead rule's
-#: landscape through the tube's smoother one: the bead rule's many contact registries make its
-#: own Monte Carlo glassy (on 10_1 … 10_8, tube annealings then bead polishes were the lowest
-#: bead states of 7 of 8 knots and agreed two by two on 5; bench/RESULTS.md, 2026-12-03,
-#: third session). The first round stays the bead rule's own: most knots through 7 crossings
-#: converge in it.
-TUBE_ROUTE_FROM = 1
+#: on (0-based: the third, the first after the fresh rounds) anneal under the tube rule of
+#: diameter w = d and are then polished under the bead rule. A tube chain of w ≥ d is
+#: bead-admissible (beads at index distance ≥ 2 begin or end segments that share no bead, at
+#: least w apart: proof in :mod:`stiffknots.sweeps.cross`), so such a search is a search of
+#: the bead rule's landscape through the tube's smoother one; the bead rule's many contact
+#: registries make its own Monte Carlo glassy (on 10_1 … 10_8, tube annealings then bead
+#: polishes held the lowest bead state of 7 of 8 knots; bench/RESULTS.md, 2026-12-03, third
+#: session). Not earlier: from the second round on, two tube-route searches agreed on a state
+#: of the tube's funnel above the bead rule's own searches' lowest — 7_5 "converged" at
+#: 183.65 (CB3) where a bead search reaches the 80 at 176.98 — so the fresh rounds stay the
+#: bead rule's own, and the rounds after them, which had found nothing more, try the route.
+TUBE_ROUTE_FROM = 2
 
 
 @dataclass
@@ -273,7 +275,7 @@ def anneal(
     polish : take every replica's best chain to its local minimum with the final minimiser
         (:func:`stiffknots.engine.polish.polish`; unit bonds and exclusion held exactly, no
         strand passage); its report is in each replica's ``polish``.
-    tube_route : in a bead-rule run (with ``polish``), the new searches from the second round
+    tube_route : in a bead-rule run (with ``polish``), the new searches from the third round
         on anneal under the tube rule of diameter w = d and are polished under the bead rule
         (:data:`TUBE_ROUTE_FROM`; each such replica says so in ``observables["search"]``);
         False: every search is the bead rule's own Monte Carlo.

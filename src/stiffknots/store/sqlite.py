@@ -516,7 +516,8 @@ class Store:
             ``eps_max``, ``count``, ``representative`` (row id of the lowest-ε replica) and
             its ``seed``, ``replica``, ``start``, ``min_segment_distance``, ``converged``,
             ``knot_verified``; ``converged_count``; ``eps_all`` (every member's ε,
-            increasing); ``starts`` (start → count); ``ids``.
+            increasing); ``starts`` (start → count); ``eps_by_start`` (start → its members'
+            ε, increasing); ``ids``.
 
         Raises
         ------
@@ -572,6 +573,10 @@ class Store:
                 "converged_count": sum(m["converged"] is True for m in members),
                 "eps_all": sorted(float(m["epsilon"]) for m in members),
                 "starts": dict(Counter(m["start"] or "unknown" for m in members)),
+                "eps_by_start": {st: sorted(float(m["epsilon"]) for m in members
+                                            if (m["start"] or "unknown") == st)
+                                 for st in dict.fromkeys(m["start"] or "unknown"
+                                                         for m in members)},
                 "ids": [m["id"] for m in members],
             })
         first = rows[0]
@@ -627,7 +632,7 @@ class Store:
                 "thickness": best["thickness"], "w_over_L": best["w_over_L"],
                 "state": gs["name"], "shape": gs["shape"], "multiplicity": gs["multiplicity"],
                 "epsilon": gs["epsilon"], "eps_mean": gs["eps_mean"], "count": gs["count"],
-                "eps_all": gs["eps_all"],
+                "eps_all": gs["eps_all"], "eps_by_start": gs["eps_by_start"],
                 "replicas": best["replicas"], "n_states": 1 + len(best["metastable"]),
                 "metastable": "; ".join(f"{s['name']} {s['epsilon']:.2f} ×{s['count']}"
                                         for s in best["metastable"]),

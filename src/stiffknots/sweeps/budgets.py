@@ -22,10 +22,11 @@ Measurements behind the default row (2026-11-29, ``bench/defaults_survey.py``: t
 replicas — 15 M moves, polished — through ``stiffknots anneal``, 35 knots through 8
 crossings, bead rule): 7–13 CPU seconds per replica; about half the knots converge with
 their first two replicas. A sweep of every prime knot through 10 crossings under both models
-(498 (knot, model) pairs) on 2 free cores then takes about 3 h on ``default`` (an estimate:
-that run has not been made on this machine; the README says what has been run), 45 min on
-``small``. Before 2026-11-29 ``default`` was 4 × 30 M moves of the uniform-length crankshafts
-(≈ 76 CPU s per pair, 5.3 h).
+(498 (knot, model) pairs) on 2 free cores then takes about 3 h on ``default`` (projected from
+10_1 … 10_8: 351 s, 2026-12-03, with every tube replica seeding a bead replica, which spares
+the bead ensembles most added replicas; the 249-knot run has not been made in one piece on
+this machine: the README says what has been run), 45 min on ``small``. Before 2026-11-29
+``default`` was 4 × 30 M moves of the uniform-length crankshafts (≈ 76 CPU s per pair, 5.3 h).
 """
 
 from __future__ import annotations

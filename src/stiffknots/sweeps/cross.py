@@ -36,6 +36,7 @@ import numpy as np
 
 from stiffknots._version import __version__
 from stiffknots.store import ReplicaKey, Store, row_from_replica, settings_hash
+from stiffknots.sweeps.convergence import SEEDED_START  # its ``start``
 from stiffknots.sweeps.models import Model
 
 __all__ = ["OLDER_SEEDED_REPLICA", "SEEDED_REPLICA", "SEEDED_START", "seed_from_tube", "seed_pairs"]
@@ -46,8 +47,6 @@ __all__ = ["OLDER_SEEDED_REPLICA", "SEEDED_REPLICA", "SEEDED_START", "seed_from_
 SEEDED_REPLICA = 2_000_000
 #: the replica number of the one seeded replica of the older rule (the lowest tube replica)
 OLDER_SEEDED_REPLICA = 1_000_000
-#: its ``start``
-SEEDED_START = "tube-ground"
 
 
 @dataclass
