@@ -247,13 +247,14 @@ def test_a_replicas_time_counts_its_polish_and_knot_check():
 
 
 def test_bead_rule_searches_after_the_fresh_rounds_take_the_tube_route():
-    """From the third round on, a bead-rule run's new searches anneal under the tube rule of
-    diameter w = d and are polished under the bead rule (problems.closed.TUBE_ROUTE_FROM);
-    the fresh rounds, a tube-rule run, a run without the polish or with tube_route=False do
-    not; the settings say so."""
+    """With tube_route=True, from the third round on a bead-rule run's new searches anneal
+    under the tube rule of diameter w = d and are polished under the bead rule
+    (problems.closed.TUBE_ROUTE_FROM);
+    the fresh rounds, a tube-rule run, a run without the polish and the default
+    (tube_route=False) do not; the settings say so."""
     from stiffknots.problems.closed import TUBE_ROUTE_FROM, ClosedAnneal
 
-    p = ClosedAnneal("5_2", moves=1_000, replicas=2)
+    p = ClosedAnneal("5_2", moves=1_000, replicas=2, tube_route=True)
     assert TUBE_ROUTE_FROM == p.fresh_rounds == 2
     bead = p.settings.params
     for j in p.jobs(first=0) + p.jobs(first=2):
@@ -269,9 +270,9 @@ def test_bead_rule_searches_after_the_fresh_rounds_take_the_tube_route():
     assert p.settings_dict()["tube_route_from_round"] == 3
     from stiffknots.engine.params import MoveParams
 
-    for q in (ClosedAnneal("5_2", moves=1_000, replicas=2, tube_route=False),
-              ClosedAnneal("5_2", moves=1_000, replicas=2, polish=False),
-              ClosedAnneal("5_2", moves=1_000, replicas=2,
+    for q in (ClosedAnneal("5_2", moves=1_000, replicas=2),  # the default: off
+              ClosedAnneal("5_2", moves=1_000, replicas=2, tube_route=True, polish=False),
+              ClosedAnneal("5_2", moves=1_000, replicas=2, tube_route=True,
                            params=MoveParams(exclusion="tube"))):
         assert all(j.polish_params is None for j in q.jobs(first=4))
         assert "tube_route_from_round" not in q.settings_dict()
@@ -286,7 +287,7 @@ def test_a_tube_route_replica_ends_bead_admissible_polished_and_verified():
     from stiffknots.problems.base import run_job
     from stiffknots.problems.closed import ClosedAnneal
 
-    p = ClosedAnneal("4_1", moves=200_000, replicas=2, seed=3)
+    p = ClosedAnneal("4_1", moves=200_000, replicas=2, seed=3, tube_route=True)
     (job, _) = p.jobs(first=4)
     r = run_job(job)
     y = r.coords

@@ -92,7 +92,8 @@ def anneal(
         "--tube-route/--no-tube-route",
         help="Bead rule: new searches from the third round on anneal under the tube rule "
              "(w = d, whose chains the bead rule admits) and are then polished under the "
-             "bead rule — the bead rule's own Monte Carlo is glassy.")] = True,
+             "bead rule; they confirm a state but do not certify it (measured: lower grounds "
+             "for some knots, higher for as many).")] = False,
     from_file: Annotated[str | None, typer.Option(
         "--from", help="Start every replica from the curve in this file (any format of "
                        "`stiffknots identify`; resampled to --beads unit bonds, knot type "

@@ -35,18 +35,20 @@ DEFAULT_ROUNDS = 8  # rounds of replicas until the lowest state is reached by tw
 LEG_HOPS = 8
 #: … of this fraction of a replica's moves in all (12 M of the default 15 M at N = 150)
 LEG_FRACTION = 0.8
-#: Tube-route searches of the bead rule: in a bead-rule run, the new searches of this round
-#: on (0-based: the third, the first after the fresh rounds) anneal under the tube rule of
-#: diameter w = d and are then polished under the bead rule. A tube chain of w ≥ d is
-#: bead-admissible (beads at index distance ≥ 2 begin or end segments that share no bead, at
-#: least w apart: proof in :mod:`stiffknots.sweeps.cross`), so such a search is a search of
-#: the bead rule's landscape through the tube's smoother one; the bead rule's many contact
-#: registries make its own Monte Carlo glassy (on 10_1 … 10_8, tube annealings then bead
-#: polishes held the lowest bead state of 7 of 8 knots; bench/RESULTS.md, 2026-12-03, third
-#: session). Not earlier: from the second round on, two tube-route searches agreed on a state
-#: of the tube's funnel above the bead rule's own searches' lowest — 7_5 "converged" at
-#: 183.65 (CB3) where a bead search reaches the 80 at 176.98 — so the fresh rounds stay the
-#: bead rule's own, and the rounds after them, which had found nothing more, try the route.
+#: Tube-route searches of the bead rule (opt-in: ``tube_route=True``): in a bead-rule run, the
+#: new searches of this round on (0-based: the third, the first after the fresh rounds) anneal
+#: under the tube rule of diameter w = d and are then polished under the bead rule. A tube
+#: chain of w ≥ d is bead-admissible (beads at index distance ≥ 2 begin or end segments that
+#: share no bead, at least w apart: proof in :mod:`stiffknots.sweeps.cross`), so such a
+#: search is a search of the bead rule's landscape through the tube's smoother one (on 10_1 …
+#: 10_8, tube annealings then bead polishes held the lowest bead state of 7 of 8 knots). Such
+#: searches confirm a state but do not certify it (:func:`stiffknots.problems.base.verdict`).
+#: Not on by default: over the first 20 knots of the survey through 8 crossings it found lower
+#: grounds for 6 (7_5: 173.90 against 176.98; 8_2: 166.51 against 167.10) and higher ones for
+#: 7 (8_4: 188.08 against 181.49), since it takes the place of the bead rule's own new
+#: searches, and converged 13 of 20 against 14 (bench/RESULTS.md, 2026-12-03, third session).
+#: From the second round on, two tube-route searches counted like the others "converged" 7_5
+#: at 183.65 (CB3): hence the fresh rounds stay the bead rule's own.
 TUBE_ROUTE_FROM = 2
 
 
@@ -95,7 +97,7 @@ class ClosedAnneal(Problem):
                  checkpoint_seconds: float | None = 60.0,
                  start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
                  agree: int = 2, rel_tol: float = 1e-3, initial=None, polish: bool = True,
-                 tube_route: bool = True):
+                 tube_route: bool = False):
         from stiffknots.theory.bounds import closed_bounds
 
         if initial is not None:  # a curve of the user: named, resampled and checked first
@@ -228,7 +230,7 @@ def anneal(
     on_progress: Callable[[dict], None] | None = None,
     initial=None,
     polish: bool = True,
-    tube_route: bool = True,
+    tube_route: bool = False,
 ) -> AnnealResult:
     """Anneal ``replicas`` independent chains of ``knot`` and return the verified results.
 
@@ -278,7 +280,8 @@ def anneal(
     tube_route : in a bead-rule run (with ``polish``), the new searches from the third round
         on anneal under the tube rule of diameter w = d and are polished under the bead rule
         (:data:`TUBE_ROUTE_FROM`; each such replica says so in ``observables["search"]``);
-        False: every search is the bead rule's own Monte Carlo.
+        default False: every search is the bead rule's own Monte Carlo (the route's grounds
+        were lower for some knots, higher for as many, :data:`TUBE_ROUTE_FROM`).
 
     Returns
     -------
