@@ -35,6 +35,12 @@ def _row(knot, model, settings, replica, x, start="braid"):
             "min_segment_distance": float(min_segment_distance(x, True)), "wall_seconds": 1.0}
 
 
+def _models():
+    """The bead and tube models of a sweep at one width, and their replicas' settings."""
+    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
+    return bead, tube, {m.name: sweep_settings(m, budget_of("tiny")) for m in (bead, tube)}
+
+
 def test_seed_pairs_need_the_same_beads_and_a_tube_at_least_as_wide():
     bead, tube = Model("bead", D, 150), Model("tube", D, 150)
     assert seed_pairs([bead, tube]) == [(bead, tube)]
@@ -61,9 +67,7 @@ def test_every_tube_replica_seeds_a_bead_replica_polished_under_the_bead_rule(tm
     replica (SEEDED_REPLICA + its number) that ends bead-admissible with unit bonds, keeps the
     knot, lies at or below its tube ε, joins the bead ensemble (its settings hash) and is
     written once; the other sweep's tube replica seeds nothing."""
-    budget = budget_of("tiny")
-    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
-    settings = {m.name: sweep_settings(m, budget) for m in (bead, tube)}
+    bead, tube, settings = _models()
     x_tube = np.load(DATA / "polish" / "3_1_tube_singular_kkt.npy")
     x_bead = np.load(DATA / "analysis" / "3_1_seed1_r0.npy")
     rng = np.random.default_rng(3)
@@ -110,9 +114,7 @@ def test_a_tube_replica_seeded_under_the_older_rule_is_not_seeded_again(tmp_path
     """Before every tube replica seeded one, only the lowest did, as replica SEEDED_REPLICA
     whatever its number: a tube replica named by a stored seeded row's ``seeded_from`` is
     skipped (no search counted twice), the others are seeded."""
-    budget = budget_of("tiny")
-    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
-    settings = {m.name: sweep_settings(m, budget) for m in (bead, tube)}
+    bead, tube, settings = _models()
     x_tube = np.load(DATA / "polish" / "3_1_tube_singular_kkt.npy")
     with Store(tmp_path / "s.db") as st:
         st.put(_row("3_1", tube, settings["tube"], 0, x_tube), x_tube)
@@ -127,9 +129,7 @@ def test_a_tube_replica_seeded_under_the_older_rule_is_not_seeded_again(tmp_path
 
 
 def test_nothing_is_seeded_without_a_tube_ensemble(tmp_path):
-    budget = budget_of("tiny")
-    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
-    settings = {m.name: sweep_settings(m, budget) for m in (bead, tube)}
+    bead, tube, settings = _models()
     x_bead = np.load(DATA / "analysis" / "3_1_seed1_r0.npy")
     with Store(tmp_path / "s.db") as st:
         st.put(_row("3_1", bead, settings["bead"], 0, x_bead), x_bead)
