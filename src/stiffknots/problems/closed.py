@@ -41,7 +41,7 @@ LEG_FRACTION = 0.8
 #: chain of w ≥ d is bead-admissible (beads at index distance ≥ 2 begin or end segments that
 #: share no bead, at least w apart: proof in :mod:`stiffknots.sweeps.cross`), so such a
 #: search is a search of the bead rule's landscape through the tube's smoother one (on 10_1 …
-#: 10_8, tube annealings then bead polishes held the lowest bead state of 7 of 8 knots). Such
+#: 10_8, tube annealings then bead polishes held the lowest bead state of 5 of 8 knots). Such
 #: searches confirm a state but do not certify it (:func:`stiffknots.problems.base.verdict`).
 #: Not on by default: over the first 20 knots of the survey through 8 crossings it found lower
 #: grounds for 6 (7_5: 173.90 against 176.98; 8_2: 166.51 against 167.10) and higher ones for
