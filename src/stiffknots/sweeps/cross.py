@@ -17,12 +17,14 @@ polishes it under the bead rule (:func:`stiffknots.engine.polish.polish`: no str
 bonds and the rule held exactly), verifies its knot type and stores it in the bead ensemble
 as replica :data:`SEEDED_REPLICA` + r (r: the tube replica's number) with
 ``start = "tube-ground"`` and, under ``extra``, the tube replica it came from
-(``seeded_from``) and the polish's figures. Each is one more independent search of the bead
-ensemble — a tube annealing from its own seed, then a bead-rule polish — and its verdict
-counts it like any replica (the rule of :mod:`stiffknots.sweeps.convergence`), with no Monte
-Carlo of its own. Reproducible: a seeded replica depends only on its tube replica, itself
-fixed by its key, and a stored key is never written again; a tube replica seeded under the
-older rule (only the lowest, as replica :data:`OLDER_SEEDED_REPLICA`) is not seeded twice.
+(``seeded_from``) and the polish's figures. Each is one more search of the bead ensemble — a
+tube annealing from its own seed, then a bead-rule polish — with no Monte Carlo of its own;
+it can lower the ensemble's ground and confirm a state, but the verdict needs one of the
+ensemble's own searches at its ground too (:mod:`stiffknots.sweeps.convergence`: seeded
+replicas from one tube funnel agree easily above the bead rule's lowest). Reproducible: a
+seeded replica depends only on its tube replica, itself fixed by its key, and a stored key
+is never written again; a tube replica seeded under the older rule (only the lowest, as
+replica :data:`OLDER_SEEDED_REPLICA`) is not seeded twice.
 """
 
 from __future__ import annotations
@@ -60,7 +62,7 @@ class _Seeded:
     cpu_time: float
     knot_verified: bool
     seed: int
-    replica: int = SEEDED_REPLICA
+    replica: int
     start: str = SEEDED_START
     version: str = __version__
     seeded_from: dict = field(default_factory=dict)

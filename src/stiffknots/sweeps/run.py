@@ -354,13 +354,12 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             return []
         g["waiting"] = False
         new = extend(g)
-        if g["settled"] and g["model"].exclusion == "tube":
-            seed_knot(g["knot"])
-            for b in groups.values():
-                if b["knot"] == g["knot"] and b.get("waiting") and b["open"] == 0:
-                    new += decide(b)
-        elif g["model"].exclusion == "tube":
+        if g["model"].exclusion == "tube":
             seed_knot(g["knot"])  # its replicas so far: the bead verdict will count them
+            if g["settled"]:
+                for b in groups.values():
+                    if b["knot"] == g["knot"] and b.get("waiting") and b["open"] == 0:
+                        new += decide(b)
         return new
 
     started = False
