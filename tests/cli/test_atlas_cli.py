@@ -222,6 +222,27 @@ def test_db_states_and_grounds(tmp_path):
     assert "80 147.00 ×1" in rows[2]  # 4_1 bead: its metastable 80
 
 
+def test_db_states_shows_a_touching_crossing(tmp_path):
+    """A bead-rule state whose strands touch where they cross sits at the polish's strand
+    gap (1e-4): the table prints it as 1.0e-04 (not 0.000) and says what it means."""
+    bead, = parse_models("bead")
+    db = tmp_path / "t.db"
+    with Store(db) as st:
+        for r, eps, gap in [(0, 250.68, 1e-4), (1, 266.62, 0.457)]:
+            st.put({"knot": "10_6", "exclusion": "bead", "beads": 150,
+                    "thickness": bead.thickness, "seed": 0, "replica": r,
+                    "settings": sweep_settings(bead, BUDGETS["small"]), "epsilon": eps,
+                    "min_segment_distance": gap, "wall_seconds": 1.0, "shape": "other",
+                    "multiplicity": None, "start": "braid"}, np.zeros((150, 3)) + r)
+    rc, out, err = cli("db", "--db", str(db), "states", "10_6")
+    assert rc == 0, err
+    text = " ".join(out.split())
+    assert "1.0e-04" in text and "0.457" in text and "0.000" not in text
+    assert "two strands touch where they cross" in text
+    rc, out, err = cli("db", "--db", str(_synthetic_db(tmp_path / "s.db")), "states", "3_1")
+    assert rc == 0 and "touch" not in out  # no note where nothing touches
+
+
 @pytest.mark.parametrize("args", [
     ("states", "3_1"),  # no database there
     ("states", "5_2"),  # nothing stored for it

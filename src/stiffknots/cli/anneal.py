@@ -33,6 +33,7 @@ from stiffknots.cli.app import (
     tube_only,
     width_of,
 )
+from stiffknots.report.text import TOUCHING_BELOW, segment_distance_text, touching_note
 
 
 def _thin_beads(name: str, w_over_l: float) -> int:
@@ -201,6 +202,8 @@ def anneal(
         notes.append("↳k: basin hops that continue the search of replica k")
     if any(r.observables.get("search") for r in res.replicas):
         notes.append("ᵗ: annealed under the tube rule w = d, polished under the bead rule")
+    if any(r.min_segment_distance < TOUCHING_BELOW for r in res.replicas):
+        notes.append(touching_note())
     t.caption = "; ".join(notes) or None
     for r in res.replicas:
         tag = "ᵗ" if r.observables.get("search") else ""
@@ -208,7 +211,8 @@ def anneal(
                   f"{r.epsilon:.4f}",
                   r.observables["shape"],
                   escape(str(r.knot)) + (" ✓" if r.knot_verified else " ✗"),
-                  f"{r.min_segment_distance:.3f}", f"{r.acceptance['single']['rate']:.3f}",
+                  segment_distance_text(r.min_segment_distance),
+                  f"{r.acceptance['single']['rate']:.3f}",
                   f"{r.acceptance['multi']['rate']:.3f}", f"{r.wall_time:.1f}")
     out.print(t)
     b = res.bounds

@@ -18,6 +18,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from stiffknots.cli.app import JsonOpt, UserError, dump, out
+from stiffknots.report.text import TOUCHING_BELOW, segment_distance_text, touching_note
 
 db_app = typer.Typer(
     no_args_is_help=True, add_completion=False,
@@ -83,7 +84,10 @@ def states(
             t.add_row(escape(st["name"]), role, f"{st['epsilon']:.3f}", f"{st['eps_mean']:.3f}",
                       str(st["count"]), escape(", ".join(f"{a} {b}" for a, b in
                                                          st["starts"].items())),
-                      f"{st['min_segment_distance']:.3f}")
+                      segment_distance_text(st["min_segment_distance"]))
+        if any(st["min_segment_distance"] < TOUCHING_BELOW
+               for st in [e["ground"], *e["metastable"]]):
+            t.caption = touching_note()
         out.print(t)
     out.print(f"converged: {CONVERGENCE_RULE}", highlight=False, markup=False)
 

@@ -100,6 +100,7 @@ import numpy as np
 
 from stiffknots._json import to_plain
 from stiffknots._version import __version__
+from stiffknots.report.text import segment_distance_text
 from stiffknots.theory import closed_bounds
 
 __all__ = [
@@ -389,14 +390,6 @@ def _e(x: Any) -> str:
 
 def _num(x: float | None, digits: int = 2) -> str:
     return "—" if x is None else f"{x:.{digits}f}"
-
-
-def _dist(x: float | None) -> str:
-    """A segment distance: 3 decimals, or two significant figures below 10⁻³ (the bead rule
-    lets two segments close to the guard's gap of 10⁻⁴, which "0.000" would hide)."""
-    if x is None:
-        return "—"
-    return f"{x:.3f}" if x >= 1e-3 else f"{x:.1e}"
 
 
 def _natural(name: str) -> str:
@@ -1062,7 +1055,8 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
                                      lambda m: str(len(m.metastable)) if m.ground or
                                      m.metastable else None))
         cells.append(_per_model_cell(
-            k, models, lambda m: _dist(gs(m).min_segment_distance) if gs(m) else "—",
+            k, models,
+            lambda m: segment_distance_text(gs(m).min_segment_distance) if gs(m) else "—",
             lambda m: (f"{gs(m).min_segment_distance:.6f}"
                        if gs(m) and gs(m).min_segment_distance is not None else None), "num"))
         fam = ", ".join(k.families)
@@ -1207,7 +1201,7 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
                 f'<td class="num">{_num(st.eps_mean)}</td>'
                 f'<td class="num">{_count_text(st, m.replicas)}</td>'
                 f"<td>{_yes_no(st.converged)}</td>"
-                f'<td class="num">{_dist(st.min_segment_distance)}</td>'
+                f'<td class="num">{segment_distance_text(st.min_segment_distance)}</td>'
                 f'<td class="width">{_e(st.width) if st.width else "—"}</td>'
                 f"<td>{view}</td></tr>\n")
         parts.append("</tbody></table>\n")
