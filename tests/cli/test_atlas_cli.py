@@ -84,6 +84,9 @@ def test_atlas_json_shape(tmp_path):
                           "--workers", "2", "--out", str(out), "--db", str(db), "--json")
     assert rc == 0, err
     d = json.loads(stdout)
+    # the progress still goes to stderr with --json (a line per job where it is no terminal):
+    # a sweep of hours is not silent, and stdout holds the JSON alone
+    assert "2/2 jobs, " in err and "3_1/bead/r0: ε = " in err and "3_1/bead/r1: ε = " in err
     assert d["db"] == str(db) and d["html"] == str(out / "index.html")
     assert (out / "index.html").exists() and (out / "knots" / "3_1.html").exists()
     assert (out / "families.json").exists() and (out / "atlas.json").exists()
@@ -392,7 +395,8 @@ def test_progress_lines_where_stderr_is_not_a_terminal():
     assert " 2/5 jobs, " in lines[2] and lines[2].endswith("4_1/bead/r0: failed")
     assert lines[3].endswith("4_1/bead: seeded from tube replica 1, ε = 127.46")
     assert len(lines) == 4
-    # with --json nothing at all; on a terminal the bar, not the lines
+    # disabled (a caller that draws its own): nothing at all; on a terminal the bar, not the
+    # lines
     quiet = io.StringIO()
     bar = SweepProgress(disable=True, console=Console(file=quiet, force_terminal=False))
     with bar:

@@ -43,8 +43,9 @@ class SweepProgress:
     """A live bar over the sweep's jobs on stderr: jobs done of planned (a running job counts
     by its moves done), time left, the last job finished. Where stderr is not a terminal (a
     log file, a batch job) the bar is not drawn; a line per finished job says the same
-    instead (jobs done of planned, elapsed, time left, the job's result). Nothing is shown
-    with ``--json``. It has every method of :class:`stiffknots.sweeps.SweepListener` without
+    instead (jobs done of planned, elapsed, time left, the job's result). With ``--json`` the
+    same goes to stderr (a sweep takes hours; stdout holds the JSON alone); ``disable`` shows
+    nothing (a caller that draws its own). It has every method of :class:`stiffknots.sweeps.SweepListener` without
     being a subclass, so that the command line starts without importing Dask.
 
     Time left is the mean pace so far times the jobs *expected*, not only those planned: a
@@ -242,7 +243,7 @@ def atlas(
     db = prepare_file(db, "--db")
     out_dir = prepare_folder(out_dir, "--out")
     command = "stiffknots " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-    with SweepProgress(disable=json_) as bar:
+    with SweepProgress() as bar:  # on stderr, --json too: stdout holds the JSON alone
         d = run_atlas(names, mods, bud, db=db, out=out_dir, seed=seed, scheduler=scheduler,
                       workers=workers, max_replicas=max_replicas, listener=bar,
                       command=command, run=not stored)
