@@ -307,7 +307,32 @@ def test_sigterm_stops_a_run_after_its_knot_checks(tmp_path, runs):
     time.sleep(1.0)  # the workers run their replicas: every knot check of the start is done
     pids = workers(r.p.pid)
     os.kill(r.p.pid, signal.SIGTERM)
-    assert r.wait(timeout=20) != 0
+    # the same stop as Ctrl-C (since 2026-12-03; it was a plain kill), with exit code 143
+    rc = r.wait(timeout=20)
+    assert rc == 143, r.err
+    assert "Traceback" not in r.err
+    lines = [ln for ln in r.err.splitlines() if ln.strip()]
+    assert lines and lines[-1].startswith("interrupted"), r.err  # as Ctrl-C says it
+    assert until(lambda: not any(alive(p) for p in pids), 10), [p for p in pids if alive(p)]
+
+
+def test_sigterm_after_two_of_three_replicas_reports_them(tmp_path, runs):
+    """``kill PID`` stops a run as Ctrl-C does: the finished replicas shown, written and
+    marked partial, exit code 143 (a batch system's stop keeps what was done)."""
+    r = start(runs, ["anneal", "3_1", "--replicas", "3", "--moves", "600000", "--out", "out"],
+              tmp_path)
+    assert until(lambda: sum("finished in" in ln for ln in r.err_lines) >= 2, 300), r.err
+    pids = workers(r.p.pid)
+    os.kill(r.p.pid, signal.SIGTERM)
+    rc = r.wait()
+    if sum("finished in" in ln for ln in r.err_lines) == 3:
+        pytest.skip("the third replica finished with the others (more than two cores)")
+    assert rc == 143, r.err
+    assert "Traceback" not in r.err
+    lines = [ln for ln in r.err.splitlines() if ln.strip()]
+    assert lines[-1].startswith("interrupted: 2 of 3 replicas finished"), r.err
+    res = json.loads((tmp_path / "out" / "result.json").read_text())
+    assert res["interrupted"] is True and len(res["replicas"]) == 2
     assert until(lambda: not any(alive(p) for p in pids), 10), [p for p in pids if alive(p)]
 
 

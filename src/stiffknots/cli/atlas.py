@@ -45,8 +45,9 @@ class SweepProgress:
     log file, a batch job) the bar is not drawn; a line per finished job says the same
     instead (jobs done of planned, elapsed, time left, the job's result). With ``--json`` the
     same goes to stderr (a sweep takes hours; stdout holds the JSON alone); ``disable`` shows
-    nothing (a caller that draws its own). It has every method of :class:`stiffknots.sweeps.SweepListener` without
-    being a subclass, so that the command line starts without importing Dask.
+    nothing (a caller that draws its own). It has every method of
+    :class:`stiffknots.sweeps.SweepListener` without being a subclass, so that the command line
+    starts without importing Dask.
 
     Time left is the mean pace so far times the jobs *expected*, not only those planned: a
     (knot, model) not converged gets replicas added, so the plan grows as the sweep goes

@@ -1,9 +1,11 @@
 """Entry point of the ``stiffknots`` command: user mistakes → one line on stderr and exit
-code 2, Ctrl-C → exit 130, never a traceback for either."""
+code 2, Ctrl-C → exit 130, ``kill PID`` (SIGTERM) → the same stop as Ctrl-C with exit code
+143, never a traceback for any of them."""
 
 from __future__ import annotations
 
 import os
+import signal
 import sys
 
 import typer
@@ -104,8 +106,41 @@ def _json_stdout_only() -> None:
     sys.stdout = os.fdopen(real, "w", encoding="utf-8", buffering=1)
 
 
+#: set when SIGTERM stopped the command (:func:`_sigterm_as_interrupt`)
+_TERMINATED = [False]
+
+
+def _sigterm_as_interrupt() -> None:
+    """``kill PID`` (SIGTERM) stops the command as Ctrl-C does — the finished replicas shown
+    and written, marked partial; a sweep's results stored, its cluster closed, the same
+    command to resume — and it exits with code 143 (128 + 15) instead of 130.
+
+    SIGTERM is how a batch system (Slurm's ``scancel``, a job's time limit) stops a job, and
+    the only polite stop of a command started in the background by a script, whose shell
+    sets Ctrl-C's SIGINT to ignored. Until 2026-12-03 it killed the process outright (every
+    file and database row stayed whole, but nothing partial was reported). The handler acts
+    once (a second SIGTERM kills at once) and only in this process: a process forked from it
+    (a Dask nanny of the local cluster, its worker) gets the default, so that its cluster can
+    still end it with SIGTERM."""
+    main_pid = os.getpid()
+
+    def handler(signum, frame):
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        if os.getpid() != main_pid:  # a forked child: die as it would have
+            os.kill(os.getpid(), signal.SIGTERM)
+            return
+        _TERMINATED[0] = True
+        raise KeyboardInterrupt
+
+    try:
+        signal.signal(signal.SIGTERM, handler)
+    except (ValueError, OSError):  # not the main thread (an embedding application): leave it
+        pass
+
+
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
+    _sigterm_as_interrupt()
     _note_cold_cache()
     _json_stdout_only()
     try:
@@ -113,6 +148,8 @@ def main() -> None:
     except SystemExit as e:
         if e.code not in (0, None):
             release_folders()  # a folder the failed command created and left empty
+        if e.code == 130 and _TERMINATED[0]:
+            raise SystemExit(143) from None
         raise
 
 

@@ -226,15 +226,22 @@ def _keep_sigterm():
     leaves it: afterwards ``kill PID`` no longer stopped a run (the handler swallows the
     signal), while Python still reported the default. The disposition Python knows is
     reinstalled after the call (in the main thread, the only one that may set handlers; in
-    other threads :func:`homfly_code` runs topoly in a forked child anyway).
+    other threads :func:`homfly_code` runs topoly in a forked child anyway). During the call
+    SIGTERM is blocked, so that one sent then waits and reaches that disposition afterwards
+    instead of topoly's handler (a ``kill PID`` during a knot check was lost: the command
+    line's stop, :mod:`stiffknots.cli.main`, never came).
     """
     main = threading.current_thread() is threading.main_thread()
     saved = signal.getsignal(signal.SIGTERM) if main else None
+    mask = main and hasattr(signal, "pthread_sigmask")
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM}) if mask else None
     try:
         yield
     finally:
         if main and saved is not None:
             signal.signal(signal.SIGTERM, saved)
+        if mask:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def _topoly():
