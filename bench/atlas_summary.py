@@ -8,8 +8,11 @@ Reads the store only (any sweep: ``stiffknots atlas``). Per model (bead rule, tu
 :mod:`stiffknots.sweeps.convergence` (≥ 2 replicas of the ground shape within 0.1 % of its
 lowest ε) by crossing number, the pairs not converged, and the distribution of the relative
 gap between the lowest replica of the ground shape and the next one of that shape — the gap
-the verdict's 0.1 % must bridge (README, "Bead rule against tube"). Every number is at the
-stored width (N and d or w/L, printed).
+the verdict's 0.1 % must bridge (README, "Bead rule against tube"); and the replicas whose
+strands touch where they cross (min segment distance below 10⁻³: the bead rule's touching
+crossings, held at the polish's strand gap), searches of the model's own and seeded ones
+apart, with how far above their knot's lowest state they end. Every number is at the stored
+width (N and d or w/L, printed).
 """
 
 from __future__ import annotations
@@ -21,9 +24,10 @@ import sys
 
 from stiffknots.knots.catalogue import get_knot
 from stiffknots.knots.families import families_of, predicted_shape
+from stiffknots.report.text import TOUCHING_BELOW
 from stiffknots.store.keys import knot_sort_key
 from stiffknots.store.sqlite import Store
-from stiffknots.sweeps.convergence import RULE, is_converged
+from stiffknots.sweeps.convergence import RULE, SEEDED_START, is_converged
 
 GAP_EDGES = (1e-3, 3e-3, 1e-2, 3e-2)
 GAP_LABELS = ("≤ 0.1 %", "0.1–0.3 %", "0.3–1 %", "1–3 %", "> 3 %")
@@ -34,12 +38,14 @@ def summarise(path: str) -> dict:
     grounds = store.ground_states()
     rows = store._query(  # noqa: SLF001 (numbers only, no coordinates)
         "SELECT knot, exclusion, w_over_L, beads, epsilon, shape, multiplicity, cpu_seconds, "
-        "wall_seconds FROM replicas")
+        "wall_seconds, min_segment_distance, start FROM replicas")
     by_pair: dict[tuple[str, str], list[tuple]] = collections.defaultdict(list)
     widths: dict[str, set] = collections.defaultdict(set)
-    for knot, model, wl, beads, eps, shape, mult, cpu, wall in rows:
+    touch: dict[tuple[str, str], list[tuple]] = collections.defaultdict(list)
+    for knot, model, wl, beads, eps, shape, mult, cpu, wall, gap, start in rows:
         by_pair[(knot, model)].append((eps, f"{shape}{mult or ''}", cpu or 0.0, wall))
         widths[model].add((beads, round(wl, 6)))
+        touch[(knot, model)].append((eps, gap < TOUCHING_BELOW, start == SEEDED_START))
     out: dict = {"db": str(path), "rule": RULE, "models": {}}
     for model in sorted({m for _, m in by_pair}):
         pairs = sorted((k for k, m in by_pair if m == model), key=knot_sort_key)
@@ -76,6 +82,21 @@ def summarise(path: str) -> dict:
                 row["converged"] += bool(verdict.get(k))
                 if got is not None:
                     row["shapes"][got[0] if got[0] != "CB" else f"CB({got[1]})"] += 1
+        touching = {}
+        for kind, seeded in (("own", False), ("seeded", True)):
+            groups = {True: [], False: []}  # touching? → excess over the knot's lowest
+            for k in pairs:
+                low = min(e for e, _, _ in touch[(k, model)])
+                for e, t, sd in touch[(k, model)]:
+                    if sd == seeded:
+                        groups[t].append(e / low - 1.0)
+            touching[kind] = {
+                "replicas": len(groups[True]) + len(groups[False]),
+                "touching": len(groups[True]),
+                "mean_excess_touching": _mean(groups[True]),
+                "mean_excess_not_touching": _mean(groups[False])}
+        touching["grounds_touching"] = [k for k in pairs if any(
+            t for e, t, _ in touch[(k, model)] if e == min(x for x, _, _ in touch[(k, model)]))]
         out["models"][model] = {
             "widths": [{"N": b, "w/L": w} for b, w in sorted(widths[model])],
             "pairs": len(pairs), "replicas": len(reps),
@@ -89,8 +110,13 @@ def summarise(path: str) -> dict:
             "ground_shape_reached_once": lone,
             "families": {f: {**v, "shapes": dict(v["shapes"].most_common())}
                          for f, v in fam_rows.items()},
+            "touching_crossings": touching,
         }
     return out
+
+
+def _mean(xs: list[float]) -> float | None:
+    return round(sum(xs) / len(xs), 4) if xs else None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -113,6 +139,17 @@ def main(argv: list[str] | None = None) -> int:
               + ", ".join(f"{k} {v}" for k, v in m["gap_to_second_of_ground_shape"].items())
               + f"; reached once {m['ground_shape_reached_once']}")
         print(f"  not converged ({len(m['not_converged'])}): {', '.join(m['not_converged'])}")
+        tc = m["touching_crossings"]
+        for kind in ("own", "seeded"):
+            t = tc[kind]
+            if t["replicas"]:
+                exc = ", ".join(f"{lab} {100 * v:.1f} %" for lab, v in (
+                    ("touching", t["mean_excess_touching"]),
+                    ("not", t["mean_excess_not_touching"])) if v is not None)
+                print(f"  strands touching where they cross ({kind} searches): {t['touching']} "
+                      f"of {t['replicas']}; mean excess over the knot's lowest: {exc}")
+        print(f"  grounds that touch: {len(tc['grounds_touching'])} "
+              f"({', '.join(tc['grounds_touching']) or '—'})")
         print("  | family | knots | ground = predicted shape | converged | ground shapes |")
         print("  |---|---|---|---|---|")
         for fam in ("n=i", "4C", "80", "none"):
