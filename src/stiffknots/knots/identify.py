@@ -229,7 +229,9 @@ def _keep_sigterm():
     other threads :func:`homfly_code` runs topoly in a forked child anyway). During the call
     SIGTERM is blocked, so that one sent then waits and reaches that disposition afterwards
     instead of topoly's handler (a ``kill PID`` during a knot check was lost: the command
-    line's stop, :mod:`stiffknots.cli.main`, never came).
+    line's stop, :mod:`stiffknots.cli.main`, never came). The mask is the calling thread's:
+    it holds the signal back because topoly runs here only while this is the process's one
+    thread (:func:`homfly_code` forks otherwise).
     """
     main = threading.current_thread() is threading.main_thread()
     saved = signal.getsignal(signal.SIGTERM) if main else None

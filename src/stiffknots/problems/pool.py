@@ -73,27 +73,19 @@ def _die_with_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True).start()
 
 
-#: the signals held back while workers are spawned: Ctrl-C, and SIGTERM, which the command
-#: line turns into the same interruption (:mod:`stiffknots.cli.main`)
-_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM}
-
-
 @contextlib.contextmanager
 def _ctrl_c_held():
-    """Hold Ctrl-C (SIGINT) and SIGTERM back (blocked in this thread) while worker processes
-    are spawned.
+    """Hold Ctrl-C back (SIGINT blocked in this thread) while worker processes are spawned.
 
-    The workers inherit the blocked signals, so that a Ctrl-C to the process group cannot
-    reach a worker before its initializer ignores it (a worker still importing printed a
-    KeyboardInterrupt traceback); a signal meanwhile is delivered here afterwards, not lost
-    (a SIGTERM that the command line turns into an interruption then stops the run as Ctrl-C
-    does, not half-way through a spawn). The initializer unblocks both: a worker still ends on
-    SIGTERM. CPython's resource tracker starts the same way.
+    The workers inherit the blocked signal, so that a Ctrl-C to the process group cannot reach
+    a worker before its initializer ignores it (a worker still importing printed a
+    KeyboardInterrupt traceback); a Ctrl-C meanwhile is delivered here afterwards, not lost.
+    CPython's resource tracker starts the same way.
     """
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
@@ -104,7 +96,7 @@ def _worker_init(parent: int, progress_queue) -> None:
     global _PROGRESS
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
     if hasattr(signal, "pthread_sigmask"):  # blocked since the spawn (_ctrl_c_held)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_SIGNALS)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     _die_with_parent(parent)
     if progress_queue is not None:
         _PROGRESS = progress_queue.put
