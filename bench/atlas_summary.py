@@ -1,17 +1,20 @@
 """What a sweep's database holds: replicas, CPU, verdicts by crossing number, and how far apart
 the two best replicas of each ground shape are.
 
-    python bench/atlas_summary.py [results/stiffknots.db] [--json FILE]
+    python bench/atlas_summary.py [results/stiffknots.db] [--json FILE] [--structures]
 
 Reads the store only (any sweep: ``stiffknots atlas``). Per model (bead rule, tube): the
 (knot, model) pairs, the replicas and their CPU/wall seconds, the converged verdicts of
 :mod:`stiffknots.sweeps.convergence` (≥ 2 replicas of the ground shape within 0.1 % of its
 lowest ε) by crossing number, the pairs not converged, and the distribution of the relative
 gap between the lowest replica of the ground shape and the next one of that shape — the gap
-the verdict's 0.1 % must bridge (README, "Bead rule against tube"); and the replicas whose
-strands touch where they cross (min segment distance below 10⁻³: the bead rule's touching
-crossings, held at the polish's strand gap), searches of the model's own and seeded ones
-apart, with how far above their knot's lowest state they end. Every number is at the stored
+the verdict's 0.1 % must bridge (README, "Bead rule against tube"); per conjectured family (and
+for the knots in none) the ground shapes and the contact structures of the grounds (§V B:
+line-braids, point-braids, multiple points; ``--structures`` lists each structure's knots with
+their Conway notation); and the replicas whose strands touch where they cross (min segment
+distance below 10⁻³: the bead rule's touching crossings, held at the polish's strand gap),
+searches of the model's own and seeded ones apart, with how far above their knot's lowest
+state they end. Every number is at the stored
 width (N and d or w/L, printed).
 """
 
@@ -67,6 +70,8 @@ def summarise(path: str) -> dict:
         reps = [r for k in pairs for r in by_pair[(k, model)]]
         shape_of = {g["knot"]: (g["shape"], g["multiplicity"]) for g in grounds
                     if g["exclusion"] == model}
+        structure_of = {g["knot"]: g["structure"] or "unreadable chain" for g in grounds
+                        if g["exclusion"] == model}
         fam_rows: dict[str, dict] = {}
         for k in pairs:
             knot = get_knot(k)
@@ -76,12 +81,14 @@ def summarise(path: str) -> dict:
                 got[0] == pred[0] and (pred[1] is None or got[1] == pred[1]))
             for fam in families_of(knot) or ["none"]:
                 row = fam_rows.setdefault(fam, {"knots": 0, "as_predicted": 0, "converged": 0,
-                                                "shapes": collections.Counter()})
+                                                "shapes": collections.Counter(),
+                                                "structures": collections.defaultdict(list)})
                 row["knots"] += 1
                 row["as_predicted"] += hit
                 row["converged"] += bool(verdict.get(k))
                 if got is not None:
                     row["shapes"][got[0] if got[0] != "CB" else f"CB({got[1]})"] += 1
+                    row["structures"][structure_of[k]].append(k)
         touching = {}
         for kind, seeded in (("own", False), ("seeded", True)):
             groups = {True: [], False: []}  # touching? → excess over the knot's lowest
@@ -108,7 +115,9 @@ def summarise(path: str) -> dict:
             "not_converged": [k for k in pairs if not verdict.get(k)],
             "gap_to_second_of_ground_shape": dict(zip(GAP_LABELS, gaps, strict=True)),
             "ground_shape_reached_once": lone,
-            "families": {f: {**v, "shapes": dict(v["shapes"].most_common())}
+            "families": {f: {**v, "shapes": dict(v["shapes"].most_common()),
+                             "structures": dict(sorted(v["structures"].items(),
+                                                       key=lambda kv: (-len(kv[1]), kv[0])))}
                          for f, v in fam_rows.items()},
             "touching_crossings": touching,
         }
@@ -123,6 +132,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("db", nargs="?", default="results/stiffknots.db")
     ap.add_argument("--json", help="also write the summary to this file")
+    ap.add_argument("--structures", action="store_true",
+                    help="list the knots of every ground structure, per family")
     a = ap.parse_args(argv)
     s = summarise(a.db)
     print(f"{s['db']}: {s['rule']}")
@@ -158,6 +169,19 @@ def main(argv: list[str] | None = None) -> int:
                 shapes = ", ".join(f"{k} {n}" for k, n in v["shapes"].items())
                 pred = "—" if fam == "none" else str(v["as_predicted"])
                 print(f"  | {fam} | {v['knots']} | {pred} | {v['converged']} | {shapes} |")
+        print("  ground structures (§V B), per family — the commonest:")
+        for fam in ("n=i", "4C", "80", "none"):
+            v = m["families"].get(fam)
+            if not v:
+                continue
+            top = list(v["structures"].items())
+            print(f"    {fam}: " + "; ".join(f"{name} {len(ks)}" for name, ks in top[:4])
+                  + (f"; {len(top) - 4} others" if len(top) > 4 else ""))
+            if a.structures:
+                for name, ks in top:
+                    print(f"      {name} ({len(ks)}): "
+                          + ", ".join(f"{k} {get_knot(k).conway_notation or ''}".strip()
+                                      for k in ks))
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
             json.dump(s, fh, indent=1, ensure_ascii=False)

@@ -19,6 +19,7 @@ from stiffknots.analysis import (
     line_braids,
     local_multiplicity,
     structure_graph,
+    structure_name,
 )
 from stiffknots.analysis.contacts import index_separation
 from stiffknots.analysis.synthetic import (
@@ -216,6 +217,42 @@ def test_annealed_trefoil_has_a_multiplicity_two_line_braid():
     st = analyse_structure(fixture("3_1_seed1_r1.npy"))
     assert st.multiplicity.max() == 2
     assert any(b.multiplicity == 2 and b.length >= 15 for b in st.line_braids)
+
+
+def test_structure_names_of_the_paper_shapes():
+    """The names of Fig. 7: the trefoil's circular line-braid, the cage's two point-braids,
+    the 80's point-braid and three double points; a plain circle has no contacts."""
+    for i in (2, 3):
+        assert analyse_structure(torus_braid(i, 50 * i, separation=0.9)).name == (
+            f"circular line-braid (m = {i})")
+    assert analyse_structure(four_cage()).name == "2 point-braids"
+    assert analyse_structure(eight_plus_circle(600)).name == "point-braid + 3 double points"
+    assert analyse_structure(regular_polygon(150).coords).name == "no contacts"
+    st = analyse_structure(four_cage())
+    assert st.to_dict()["name"] == st.name
+    assert classify(four_cage()).structure["name"] == "2 point-braids"
+
+
+def _zone(kind, m, closed=False):
+    return SimpleNamespace(kind=kind, multiplicity=m, closed=closed)
+
+
+@pytest.mark.parametrize("zones, name", [
+    ([], "no contacts"),
+    ([_zone("multiple-point", 2)], "double point"),
+    ([_zone("line-braid", 2), _zone("multiple-point", 2), _zone("line-braid", 2)],
+     "2 line-braids (m = 2) + double point"),
+    ([_zone("multiple-point", 2), _zone("multiple-point", 3), _zone("multiple-point", 2),
+      _zone("multiple-point", 5)], "5-fold point + triple point + 2 double points"),
+    ([_zone("point-braid", 2), _zone("line-braid", 2), _zone("line-braid", 3),
+      _zone("point-braid", 3)],
+     "line-braid (m = 3) + line-braid (m = 2) + point-braid (m = 3) + point-braid"),
+    ([_zone("line-braid", 2, closed=True)], "circular line-braid (m = 2)"),
+])
+def test_structure_name_counts_and_orders_the_zones(zones, name):
+    """Line-braids first (highest m first), then point-braids, then multiple points by the
+    strands meeting; a kind that occurs more than once is counted."""
+    assert structure_name(zones) == name
 
 
 def test_structure_bad_parameters():

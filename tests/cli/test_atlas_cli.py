@@ -246,6 +246,35 @@ def test_db_states_shows_a_touching_crossing(tmp_path):
     assert rc == 0 and "touch" not in out  # no note where nothing touches
 
 
+def test_db_states_names_each_states_contact_structure(tmp_path):
+    """Below the table: the §V B structure of every state's lowest chain, in table order
+    (ground first); a chain the analysis cannot read shows a dash."""
+    from stiffknots.analysis.synthetic import four_cage, torus_braid
+
+    bead, = parse_models("bead")
+    db = tmp_path / "t.db"
+    with Store(db) as st:
+        for r, (eps, shape, x) in enumerate([(79.1, "CB", torus_braid(2, 150, separation=0.9)),
+                                             (90.0, "4C", four_cage()),
+                                             (99.0, "other", np.zeros((150, 3)))]):
+            st.put({"knot": "3_1", "exclusion": "bead", "beads": 150,
+                    "thickness": bead.thickness, "seed": 0, "replica": r,
+                    "settings": sweep_settings(bead, BUDGETS["small"]), "epsilon": eps,
+                    "min_segment_distance": 0.5, "wall_seconds": 1.0, "shape": shape,
+                    "multiplicity": 2 if shape == "CB" else None, "start": "braid"}, x)
+    rc, out, err = cli("db", "--db", str(db), "states", "3_1")
+    assert rc == 0, err
+    lines = [" ".join(ln.split()) for ln in out.splitlines()]
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("contact structure"))
+    assert lines[k + 1:k + 4] == ["ground circular line-braid (m = 2)",
+                                  "metastable 1 2 point-braids", "metastable 2 —"]
+    rc, out, err = cli("db", "--db", str(db), "states", "3_1", "--json")
+    assert rc == 0, err
+    e = json.loads(out)["ensembles"][0]
+    assert [s["structure"] for s in (e["ground"], *e["metastable"])] == [
+        "circular line-braid (m = 2)", "2 point-braids", None]
+
+
 @pytest.mark.parametrize("args", [
     ("states", "3_1"),  # no database there
     ("states", "5_2"),  # nothing stored for it

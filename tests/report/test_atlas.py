@@ -310,7 +310,32 @@ def test_input_errors_say_what_is_wrong(tmp_path, knots):
         write_atlas(tmp_path, [bad])
     with pytest.raises(ValueError, match="default_model"):
         write_atlas(tmp_path, knots, default_model="nope")
+    named = {**k, "models": {"bead": {"width": "w", "ground": {"epsilon": 1.0,
+                                                              "structure": 3}}}}
+    with pytest.raises(ValueError, match="structure must be a text"):
+        write_atlas(tmp_path, [named])
+    fam = {"groups": [], "structures": {"rows": [{"structure": "double point"}]}}
+    with pytest.raises(ValueError, match="needs 'structure' .* and 'knots'"):
+        write_atlas(tmp_path, knots, families=fam)
     assert not (tmp_path / "index.html").exists()
+
+
+def test_structures_are_escaped_and_linked(tmp_path, knots):
+    """A state's structure (§V B) shows on its knot page and as the index badge's tooltip;
+    the families' table of structures links the knots that have a page, escaped."""
+    k = {**knots[0], "models": {"bead": {"width": "w", "ground": {
+        "shape": "other", "epsilon": 171.2, "structure": "2 line-braids <m = 2>"}}}}
+    fam = {"groups": [{"label": "all", "total": 1, "counts": {"other": 1}}],
+           "structures": {"title": "by structure", "rows": [
+               {"structure": "2 line-braids <m = 2>", "knots": [k["name"], "99_9"],
+                "shapes": {"other": 2}, "epsilon": [171.2, 181.5]}]}}
+    idx = write_atlas(tmp_path, [k], families=fam, thumbnails=False)
+    html = idx.read_text(encoding="utf-8")
+    assert 'title="2 line-braids &lt;m = 2&gt;"' in html
+    assert f'<a href="knots/{k["name"]}.html">{k["name"]}</a>, 99_9' in html
+    assert '<td class="num">171.20 – 181.50</td>' in html
+    page = (tmp_path / "knots" / f"{k['name']}.html").read_text(encoding="utf-8")
+    assert "<td>2 line-braids &lt;m = 2&gt;</td>" in page
 
 
 def test_hostile_names_are_escaped(tmp_path):

@@ -462,6 +462,29 @@ def test_rows_without_a_shape_are_classified_from_their_chain(store):
     assert store.replicas()[0]["shape"] is None  # nothing written back
 
 
+def test_every_state_names_its_contact_structure(store):
+    """``structure``: the §V B name of the state's lowest chain at the ensemble's thickness;
+    None when not asked (a sweep's convergence checks) and for a stored chain the analysis
+    cannot read (not unit bonds, or beads closer than d)."""
+    from stiffknots.analysis import analyse_structure
+    from stiffknots.analysis.synthetic import four_cage, torus_braid
+
+    store.put(make_row(knot="3_1", replica=0, epsilon=79.5, shape="CB", multiplicity=2),
+              torus_braid(2, 150, separation=0.9))
+    store.put(make_row(knot="3_1", replica=1, epsilon=90.0, shape="4C"), four_cage())
+    store.put(make_row(knot="3_1", replica=2, epsilon=95.0, shape="other"), chain())
+    st = store.states("3_1")
+    names = [s["structure"] for s in (st["ground"], *st["metastable"])]
+    assert names == ["circular line-braid (m = 2)", "2 point-braids", None]
+    assert names[1] == analyse_structure(store.coords(st["metastable"][0]["representative"]),
+                                         d=D).name
+    assert all(s["structure"] is None for s in (
+        lambda x: (x["ground"], *x["metastable"]))(store.states("3_1", structure=False)))
+    (row,) = store.ground_states()
+    assert row["structure"] == "circular line-braid (m = 2)"
+    assert store.ground_states(structure=False)[0]["structure"] is None
+
+
 def test_ground_table_one_row_per_model_and_csv(store, tmp_path):
     fill_5_2(store)
     # a second settings for the 150-bead bead model with a higher ground: not chosen

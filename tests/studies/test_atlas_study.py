@@ -9,6 +9,8 @@ import math
 import numpy as np
 import pytest
 
+from stiffknots.analysis.synthetic import four_cage, torus_braid
+from stiffknots.chain import regular_polygon
 from stiffknots.knots.catalogue import catalogue, get_knot
 from stiffknots.knots.families import (
     EIGHTY_FAMILY,
@@ -25,6 +27,7 @@ from stiffknots.studies.atlas import (
     family_study,
     json_entry,
     knot_records,
+    structure_groups,
 )
 from stiffknots.sweeps import BUDGETS, parse_models, sweep_settings
 
@@ -41,6 +44,23 @@ ROWS = {
 }
 
 
+def chain_of(shape, mult, r):
+    """A unit-bond chain of the shape (the contacts are what the structure names read): the
+    circular braid CB(i) and the 4-fold cage synthetic, every other shape a plain circle (no
+    contacts); shifted by the replica index."""
+    if shape == "CB":
+        x = torus_braid(mult, 150, separation=0.9)
+    elif shape == "4C":
+        x = four_cage()
+    else:
+        x = regular_polygon(150).coords
+    return x + r
+
+
+STRUCTURE = {"CB2": "circular line-braid (m = 2)", "CB3": "circular line-braid (m = 3)",
+             "4C": "2 point-braids", "other": "no contacts", "80": "no contacts"}
+
+
 @pytest.fixture()
 def store(tmp_path):
     bead, tube = parse_models("bead,tube")
@@ -52,12 +72,12 @@ def store(tmp_path):
                     "seed": 0, "replica": r, "settings": sweep_settings(bead, BUDGETS["small"]),
                     "epsilon": eps, "min_segment_distance": 0.6, "wall_seconds": 1.0,
                     "shape": shape, "multiplicity": mult, "start": starts[r % len(starts)]},
-                   np.arange(450.0).reshape(150, 3) + r)
+                   chain_of(shape, mult, r))
     # a replica of another budget: another ensemble, never mixed in
     st.put({"knot": "5_2", "exclusion": "bead", "beads": 150, "thickness": D, "seed": 0,
             "replica": 0, "settings": sweep_settings(bead, BUDGETS["tiny"]), "epsilon": 100.0,
             "min_segment_distance": 0.6, "wall_seconds": 1.0, "shape": "4C"},
-           np.zeros((150, 3)))
+           four_cage())
     yield st
     st.close()
 
@@ -88,6 +108,14 @@ def test_family_statistics_from_store_rows(store):
     assert by["7_4"]["families"] == [] and by["7_4"]["predicted"] is None
     assert [r["name"] for r in study["mismatch"]] == ["5_2"]
     assert [(r["name"], r["shape"]) for r in study["no_family"]] == [("7_4", "other")]
+    # every ground state's contact structure named from its chain (§V B)
+    assert {k: by[k]["structure"] for k in ("3_1", "4_1", "7_4", "8_19")} == {
+        "3_1": STRUCTURE["CB2"], "4_1": STRUCTURE["4C"], "7_4": STRUCTURE["other"],
+        "8_19": STRUCTURE["CB3"]}
+    assert by["9_1"]["structure"] is None  # nothing stored
+    assert study["no_family_structures"] == [
+        {"structure": "no contacts", "count": 1, "knots": ["7_4"], "shapes": {"other": 1},
+         "epsilon": [190.0, 190.0]}]
     g7, g9, gall = study["groups"]
     assert (g7["label"], g9["label"], gall["label"]) == ("n_c < 7", "n_c < 9",
                                                           "all swept (n_c ≤ 9)")
@@ -114,7 +142,11 @@ def test_family_statistics_from_store_rows(store):
     assert [g["label"] for g in t["groups"]] == [g["label"] for g in study["groups"]]
     assert t["groups"][1]["total"] == 6
     assert t["groups"][1]["counts"]["ground = the family's shape"] == 4
-    assert "7_4 (other)" in t["note"] and "5_2 (80, predicted 4C)" in t["note"]
+    assert "Swept knots in no family: 1 with results, in 1 contact structures" in t["note"]
+    assert "no result yet" not in t["note"]  # 9_1 is in the family n = i
+    assert t["structures"]["rows"] == [{"structure": "no contacts", "knots": ["7_4"],
+                                        "shapes": {"other": 1}, "epsilon": [190.0, 190.0]}]
+    assert "5_2 (80, predicted 4C)" in t["note"]
     assert "26 of 35 (74 %, paper 75 %)" in t["note"]
 
 
@@ -127,6 +159,8 @@ def test_json_entries_and_atlas_input(store, tmp_path):
     assert e["families"] == ["4C", "80"] and "N = 150" in e["width"]
     b = e["models"]["bead"]
     assert b["replicas"] == 3 and b["ground"]["count"] == 2 and b["ground"]["converged"]
+    assert b["ground"]["structure"] == STRUCTURE["4C"]
+    assert b["metastable"][0]["structure"] == STRUCTURE["80"]
     assert [s["name"] for s in b["metastable"]] == ["80"]
     assert b["metastable"][0]["converged"] is None
     assert e["models"]["tube"] == {**e["models"]["tube"], "replicas": 0, "ground": None,
@@ -136,6 +170,7 @@ def test_json_entries_and_atlas_input(store, tmp_path):
     assert list(a["models"]) == ["bead"]  # no tube results: no tube entry
     g = a["models"]["bead"]["ground"]
     assert g["coords"].shape == (150, 3) and g["epsilon"] == 128.4
+    assert g["structure"] == STRUCTURE["4C"]
     rep = store.replicas(knot="4_1", shape="4C")
     best = min(rep, key=lambda r: r["epsilon"])
     assert np.array_equal(g["coords"], store.coords(best["id"]))
@@ -148,6 +183,12 @@ def test_json_entries_and_atlas_input(store, tmp_path):
                         families=families_table(study), thumbnails=False)
     html = index.read_text()
     assert "Conjectured families and the ground states found" in html
+    page = (tmp_path / "atlas" / "knots" / "4_1.html").read_text()
+    assert f"<td>{STRUCTURE['4C']}</td>" in page  # the states table names the structure
+    assert f'title="{STRUCTURE["4C"]}"' in html  # the ground-shape badge's tooltip
+    # the knots in no family, by structure, linked to their pages
+    assert ('<table id="structures">' in html and '<td>no contacts</td><td class="num">1</td>'
+            in html and '<a href="knots/7_4.html">7_4</a>' in html)
     assert (tmp_path / "atlas" / "knots" / "8_19.html").exists()
 
 
@@ -238,3 +279,19 @@ def test_a_bead_ground_above_the_tube_ground_is_flagged(tmp_path):
     assert flag["bead"] == 80.5 and flag["tube"] == 79.3
     assert flag["missed_by"] == pytest.approx(1.2 / 79.3) and "missed" in flag["note"]
     assert entry(79.02, 79.06)["bead_above_tube"] is None  # bead below tube: as it must be
+
+
+def test_structure_groups_largest_first_and_skip_missing():
+    rows = [{"name": "7_4", "structure": "2 line-braids (m = 2) + double point",
+             "shape": "other", "epsilon": 171.2},
+            {"name": "8_12", "structure": "line-braid (m = 3)", "shape": "other",
+             "epsilon": 249.2},
+            {"name": "8_9", "structure": "line-braid (m = 3)", "shape": "CB(i=3)",
+             "epsilon": 183.5},
+            {"name": "9_9", "structure": None, "shape": None, "epsilon": None}]
+    g = structure_groups(rows)
+    assert [(x["structure"], x["count"], x["knots"]) for x in g] == [
+        ("line-braid (m = 3)", 2, ["8_12", "8_9"]),
+        ("2 line-braids (m = 2) + double point", 1, ["7_4"])]
+    assert g[0]["shapes"] == {"other": 1, "CB(i=3)": 1}
+    assert g[0]["epsilon"] == [183.5, 249.2]

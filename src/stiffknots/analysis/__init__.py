@@ -41,6 +41,7 @@ from stiffknots.analysis.structure import (
     line_braids,
     local_multiplicity,
     structure_graph,
+    structure_name,
 )
 
 __all__ = [
@@ -68,4 +69,5 @@ __all__ = [
     "local_multiplicity",
     "shape_features",
     "structure_graph",
+    "structure_name",
 ]

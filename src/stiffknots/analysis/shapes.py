@@ -454,10 +454,11 @@ def classify(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
                      "shapes (§VII)", {})
     features, checks, st = shape_features(x, True, d=d, factor=factor, cutoff=cutoff,
                                           min_sep=min_sep, thresholds=thresholds)
-    summary = to_plain({"zones": st.zone_counts(), "graph": st.graph.summary(),
-                      "line_braids": [[b.multiplicity, round(b.length, 2)]
-                                      for b in st.line_braids],
-                      "params": st.params})
+    summary = to_plain({"name": st.name, "zones": st.zone_counts(),
+                        "graph": st.graph.summary(),
+                        "line_braids": [[b.multiplicity, round(b.length, 2)]
+                                        for b in st.line_braids],
+                        "params": st.params})
     if all(checks["CB"].values()):
         i = features["CB"]["i"]
         why = (f"winds {i}x monotonically around one axis on a thin annulus, radius "

@@ -71,6 +71,7 @@ __all__ = [
     "line_braids",
     "analyse_structure",
     "structure_graph",
+    "structure_name",
     "tangents",
     "cyclic_runs",
 ]
@@ -449,8 +450,15 @@ class Structure:
             out[z.kind] += 1
         return out
 
+    @property
+    def name(self) -> str:
+        """The structure in the words of §V B, e.g. ``"2 line-braids (m = 2) + double
+        point"`` (:func:`structure_name`)."""
+        return structure_name(self.zones)
+
     def to_dict(self) -> dict:
         return {
+            "name": self.name,
             "params": dict(self.params),
             "length": self.length,
             "n_contacts": self.contact_map.n_contacts,
@@ -461,6 +469,65 @@ class Structure:
             "zone_counts": self.zone_counts(),
             "graph": self.graph.to_dict(),
         }
+
+
+# --------------------------------------------------------------------------------------------
+# names
+# --------------------------------------------------------------------------------------------
+
+_POINT_WORDS = {2: "double point", 3: "triple point", 4: "quadruple point"}
+
+
+def _counted(count: int, singular: str, plural: str, suffix: str = "") -> str:
+    return (f"{singular}{suffix}" if count == 1 else f"{count} {plural}{suffix}")
+
+
+def structure_name(zones: list[ContactZone]) -> str:
+    """Name a structure ``{S}`` (§V B, Figs 5 and 7) by its contact zones, in the paper's
+    words: line-braids with their multiplicity ``m``, point-braids, double (triple, …)
+    points — e.g. ``"circular line-braid (m = 2)"`` (the trefoil, Fig. 7 a), ``"2
+    point-braids"`` (the 4-fold cage, Fig. 7 b), ``"point-braid + 3 double points"`` (the
+    80, Fig. 7 c), ``"no contacts"``.
+
+    The line-braids come first (highest ``m`` first; ``circular`` when one covers the whole
+    closed chain), then the point-braids (``m`` given when more than two strands meet), then
+    the multiple points (by the number of strands meeting). It names the shapes the
+    classifier calls ``other`` (:func:`~stiffknots.analysis.shapes.classify`) and sorts them
+    into groups of one structure. At a finite width a point-braid of many crossings can be
+    long enough (``min_length``, default 0.1 L) to count as a line-braid, and two double
+    points close together as one triple point: the name is that of the chain at its width.
+
+    Parameters
+    ----------
+    zones : list of ContactZone
+        :attr:`Structure.zones`.
+
+    Returns
+    -------
+    str
+    """
+    parts: list[str] = []
+    lines: dict[tuple[bool, int], int] = {}
+    points: dict[int, int] = {}
+    multis: dict[int, int] = {}
+    for z in zones:
+        if z.kind == "line-braid":
+            key = (bool(z.closed), int(z.multiplicity))
+            lines[key] = lines.get(key, 0) + 1
+        elif z.kind == "point-braid":
+            points[int(z.multiplicity)] = points.get(int(z.multiplicity), 0) + 1
+        else:
+            multis[int(z.multiplicity)] = multis.get(int(z.multiplicity), 0) + 1
+    for (closed, m), c in sorted(lines.items(), key=lambda kv: (-kv[0][1], not kv[0][0])):
+        first = "circular line-braid" if closed else "line-braid"
+        parts.append(_counted(c, first, first + "s", f" (m = {m})"))
+    for m, c in sorted(points.items(), key=lambda kv: -kv[0]):
+        parts.append(_counted(c, "point-braid", "point-braids",
+                              f" (m = {m})" if m > 2 else ""))
+    for m, c in sorted(multis.items(), key=lambda kv: -kv[0]):
+        word = _POINT_WORDS.get(m, f"{m}-fold point")
+        parts.append(_counted(c, word, word + "s"))
+    return " + ".join(parts) if parts else "no contacts"
 
 
 # --------------------------------------------------------------------------------------------

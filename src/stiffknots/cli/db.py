@@ -89,6 +89,13 @@ def states(
                for st in [e["ground"], *e["metastable"]]):
             t.caption = touching_note()
         out.print(t)
+        named = [(("ground" if k == 0 else f"metastable {k}"), st.get("structure"))
+                 for k, st in enumerate([e["ground"], *e["metastable"]])]
+        if any(v for _, v in named):
+            out.print("contact structure of each state's lowest chain (§V B):",
+                      highlight=False, markup=False)
+            for role, v in named:
+                out.print(f"  {role:<13} {v or '—'}", highlight=False, markup=False)
     out.print(f"converged: {CONVERGENCE_RULE}", highlight=False, markup=False)
 
 

@@ -48,6 +48,7 @@ where a ``STATE`` is a dict::
     {
       "shape": "4C",                     # shape class ("CB", "4C", "80", "other") or None
       "multiplicity": None,              # e.g. 2 for CB(2); shown as "CB(2)"
+      "structure": "2 point-braids",     # optional: its contact structure named (§V B)
       "epsilon": 128.39,                 # ε = E L / C of the best chain of this state
       "eps_mean": 128.6,                 # optional: mean ε of the replicas in this state
       "count": 5,                        # optional: replicas that ended in this state
@@ -76,6 +77,12 @@ its model's); a bare number is refused, since it would not say whether it is a b
         {"label": "n_c < 9", "total": 35, "counts": {...}},
       ],
       "note": "...",                             # optional free text
+      "structures": {                            # optional: knots by ground structure
+        "title": "...", "note": "...",           #   (§V B), each knot linked to its page
+        "rows": [{"structure": "2 line-braids (m = 2) + double point",
+                  "knots": ["7_4", "8_4"], "shapes": {"other": 2},
+                  "epsilon": [171.2, 181.5]}],
+      },
     }
 
 Fractions are ``count / total``. Without ``families``, :func:`family_statistics` is computed
@@ -139,6 +146,7 @@ class _State:
     role: str  # "ground" or "metastable k"
     shape: str | None
     multiplicity: int | None
+    structure: str | None
     epsilon: float | None
     eps_mean: float | None
     count: int | None
@@ -273,6 +281,10 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> _State:
     if conv is not None and not isinstance(conv, bool | np.bool_):
         raise ValueError(f"{where}: converged must be True, False or None, got {conv!r}")
     shape = d.get("shape")
+    structure = d.get("structure")
+    if structure is not None and not isinstance(structure, str):
+        raise ValueError(f"{where}: structure must be a text such as '2 point-braids' or "
+                         f"None, got {structure!r}")
     radius = _opt_float(d.get("radius"), f"{where}: radius")
     if radius is not None and radius <= 0:
         raise ValueError(f"{where}: the drawing radius must be > 0, got {radius}")
@@ -280,6 +292,7 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> _State:
         role=role,
         shape=None if shape is None else str(shape),
         multiplicity=_opt_int(d.get("multiplicity"), f"{where}: multiplicity"),
+        structure=structure,
         epsilon=eps,
         eps_mean=_opt_float(d.get("eps_mean"), f"{where}: eps_mean"),
         count=_opt_int(d.get("count"), f"{where}: count"),
@@ -741,13 +754,16 @@ def _head(title: str, prefix: str, extra_css: str) -> str:
     )
 
 
-def _shape_badge(label: str | None, shape: str | None, extra: dict) -> str:
+def _shape_badge(label: str | None, shape: str | None, extra: dict,
+                 structure: str | None = None) -> str:
+    """The shape class as a coloured badge; its contact structure (§V B) as its tooltip."""
     if label is None:
         return "—"
     from stiffknots.report.figures import shape_style
 
     colour = shape_style(shape, extra)[1]
-    return f'<span class="shape" style="background:{_e(colour)}">{_e(label)}</span>'
+    tip = f' title="{_e(structure)}"' if structure else ""
+    return f'<span class="shape" style="background:{_e(colour)}"{tip}>{_e(label)}</span>'
 
 
 def _per_model_cell(knot: _Knot, models: list[tuple[str, str]], render, sort_value,
@@ -998,6 +1014,7 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
             words = [k.name, *k.families]
             if m is not None:
                 words += [s.shape_label for s in m.states if s.shape_label]
+                words += [s.structure for s in m.states if s.structure]
                 if m.ground is not None and m.ground.shape_label:
                     attrs.append(f'data-shape-{mslug}="{_e(m.ground.shape_label)}"')
             attrs.append(f'data-search-{mslug}="{_e(" ".join(words).lower())}"')
@@ -1030,7 +1047,8 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
 
         cells.append(_per_model_cell(
             k, models,
-            lambda m: _shape_badge(gs(m).shape_label, gs(m).shape, extra) if gs(m) else "—",
+            lambda m: _shape_badge(gs(m).shape_label, gs(m).shape, extra,
+                                   gs(m).structure) if gs(m) else "—",
             lambda m: gs(m).shape_label.lower() if gs(m) and gs(m).shape_label else None))
         cells.append(_per_model_cell(
             k, models, lambda m: _num(gs(m).epsilon) if gs(m) else "—",
@@ -1079,7 +1097,7 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
 
     # family statistics
     if families is not None:
-        parts.append(_families_html(families))
+        parts.append(_families_html(families, {k.name: k.slug for k in knots}))
 
     # meta
     parts.append("<footer>\n<table class=\"meta-list\">\n")
@@ -1090,7 +1108,7 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
     return "".join(parts)
 
 
-def _families_html(families: Mapping) -> str:
+def _families_html(families: Mapping, slugs: Mapping[str, str] | None = None) -> str:
     if not isinstance(families, Mapping):
         raise ValueError("families must be a dict with 'groups' (see write_atlas)")
     groups = families.get("groups")
@@ -1126,6 +1144,40 @@ def _families_html(families: Mapping) -> str:
                + "</tr>\n</tbody></table>\n")
     if families.get("note"):
         out.append(f'<p class="figure-note">{_e(families["note"])}</p>\n')
+    if families.get("structures"):
+        out.append(_structures_html(families["structures"], slugs or {}))
+    return "".join(out)
+
+
+def _structures_html(structures: Any, slugs: Mapping[str, str]) -> str:
+    """The knots grouped by the contact structure of their ground state (§V B): one row per
+    structure, its knots linked to their pages."""
+    if not isinstance(structures, Mapping) or not isinstance(structures.get("rows"), Sequence):
+        raise ValueError("families['structures'] must be a dict with 'rows': a list of "
+                         "{'structure', 'knots', 'shapes', 'epsilon'}")
+    out = [f'<h3 id="structures-title">{_e(structures.get("title") or "Ground structures")}'
+           "</h3>\n"]
+    if structures.get("note"):
+        out.append(f'<p class="lede">{_e(structures["note"])}</p>\n')
+    out.append('<table id="structures"><thead><tr><th>structure (§V B)</th>'
+               '<th class="num">knots</th><th>ground shape</th><th class="num">ε</th>'
+               "<th>which</th></tr></thead>\n<tbody>\n")
+    for r in structures["rows"]:
+        if not isinstance(r, Mapping) or not isinstance(r.get("structure"), str) \
+                or not isinstance(r.get("knots"), Sequence):
+            raise ValueError(f"each structure row needs 'structure' (text) and 'knots' "
+                             f"(names), got {r!r}")
+        names = [str(n) for n in r["knots"]]
+        links = ", ".join(f'<a href="knots/{_e(slugs[n])}.html">{_e(n)}</a>' if n in slugs
+                          else _e(n) for n in names)
+        shapes = ", ".join(f"{_e(str(k))} {int(v)}" for k, v in (r.get("shapes") or {}).items())
+        eps = r.get("epsilon") or []
+        eps_text = (f"{_num(eps[0])} – {_num(eps[1])}" if len(eps) == 2 and eps[0] != eps[1]
+                    else _num(eps[0]) if eps else "—")
+        out.append(f"<tr><td>{_e(r['structure'])}</td><td class=\"num\">{len(names)}</td>"
+                   f"<td>{shapes or '—'}</td><td class=\"num\">{eps_text}</td>"
+                   f"<td>{links}</td></tr>\n")
+    out.append("</tbody></table>\n")
     return "".join(out)
 
 
@@ -1176,6 +1228,8 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
             parts.append("<p>No states.</p>\n")
             continue
         parts.append('<table class="states"><thead><tr><th>state</th><th>shape</th>'
+                     '<th title="line-braids (m: strands), point-braids and multiple points '
+                     'of the chain at its width (§V B)">structure</th>'
                      '<th class="num">ε</th><th class="num">mean ε</th><th class="num">count'
                      '</th><th>converged</th><th class="num">min segment distance</th>'
                      "<th>width</th><th>3D</th></tr></thead>\n<tbody>\n")
@@ -1184,8 +1238,9 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
             view = "—"
             if st.coords is not None:
                 idx = str(len(states_js))
-                cap = (f"{k.name}, {mname}, {st.role}: {st.shape_label or 'unclassified'}, "
-                       f"ε = {_num(st.epsilon)} at {st.width or 'unknown width'}")
+                named = f" ({st.structure})" if st.structure else ""
+                cap = (f"{k.name}, {mname}, {st.role}: {st.shape_label or 'unclassified'}"
+                       f"{named}, ε = {_num(st.epsilon)} at {st.width or 'unknown width'}")
                 states_js.append({**state_mesh(st.coords, closed=st.closed,
                                                radius=st.radius),
                                   "caption": cap,
@@ -1197,6 +1252,7 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
                 f'<tr class="state-row" data-state="{idx}" data-model="{_e(mname)}">'
                 f"<td>{_e(st.role)}</td>"
                 f"<td>{_shape_badge(st.shape_label, st.shape, extra)}</td>"
+                f"<td>{_e(st.structure) if st.structure else '—'}</td>"
                 f'<td class="num">{_num(st.epsilon)}</td>'
                 f'<td class="num">{_num(st.eps_mean)}</td>'
                 f'<td class="num">{_count_text(st, m.replicas)}</td>'

@@ -492,7 +492,7 @@ class Store:
 
     def states(self, knot: str, exclusion: str | None = None, beads: int | None = None,
                thickness: float | None = None, settings_hash: str | None = None, *,
-               rel_tol: float = 0.01) -> dict[str, Any]:
+               rel_tol: float = 0.01, structure: bool = True) -> dict[str, Any]:
         """Ground state and metastable states of one ensemble of a knot.
 
         The filters must select exactly one ensemble (one exclusion model, bead count,
@@ -505,6 +505,10 @@ class Store:
             Needed only when the knot has several ensembles.
         rel_tol : float, default 0.01
             Relative ε tolerance of one state (:func:`~stiffknots.analysis.group_states`).
+        structure : bool, default True
+            Name every state's contact structure (``structure``, from its representative
+            chain at the ensemble's thickness: :func:`~stiffknots.analysis.structure_name`,
+            ≈ 1 ms a state); False leaves it None (a sweep's convergence checks).
 
         Returns
         -------
@@ -512,7 +516,9 @@ class Store:
             The ensemble's fields, ``settings``, ``replicas`` (count), ``rel_tol``,
             ``classified`` (rows classified from their chains now), ``ground`` (a state) and
             ``metastable`` (states by increasing ε). A state: ``name`` (``"CB(i=2)"``,
-            ``"4C"``, ...), ``shape``, ``multiplicity``, ``epsilon`` (lowest), ``eps_mean``,
+            ``"4C"``, ...), ``structure`` (its line-braids, point-braids and multiple points
+            in the words of §V B: ``"2 line-braids (m = 2) + double point"``), ``shape``,
+            ``multiplicity``, ``epsilon`` (lowest), ``eps_mean``,
             ``eps_max``, ``count``, ``representative`` (row id of the lowest-ε replica) and
             its ``seed``, ``replica``, ``start``, ``min_segment_distance``, ``converged``,
             ``knot_verified``; ``converged_count``; ``eps_all`` (every member's ε,
@@ -542,9 +548,25 @@ class Store:
                              f"beads, thickness or settings_hash: {lines}")
         e = ens[0]
         rows = self.replicas(**{f: e[f] for f in ENSEMBLE_FIELDS})
-        return self._group(rows, rel_tol)
+        return self._group(rows, rel_tol, structure)
 
-    def _group(self, rows: list[dict[str, Any]], rel_tol: float) -> dict[str, Any]:
+    def _structure_name(self, id: int, thickness: float) -> str | None:
+        """The contact structure of a stored chain, named (§V B); None for a chain that is
+        not a unit-bond chain obeying the bead rule at ``thickness`` (the analysis assumes
+        one: on another its contacts mean little)."""
+        from stiffknots.analysis.structure import ANALYSIS_BOND_TOL, analyse_structure
+        from stiffknots.measures import chain_report
+
+        x = self.coords(id)
+        with np.errstate(all="ignore"):
+            rep = chain_report(x, True, d=thickness, bond_tol=ANALYSIS_BOND_TOL,
+                               segments=False, unit=None)
+        if rep["problems"]:
+            return None
+        return analyse_structure(x, True, d=thickness).name
+
+    def _group(self, rows: list[dict[str, Any]], rel_tol: float,
+               structure: bool = True) -> dict[str, Any]:
         """States of the rows of one ensemble (see :meth:`states`)."""
         from stiffknots.analysis.states import group_states
 
@@ -564,7 +586,10 @@ class Store:
             members = [rows[k] for k in g.members]
             rep = rows[g.representative]
             states.append({
-                "name": g.name, "shape": g.label, "multiplicity": g.multiplicity,
+                "name": g.name,
+                "structure": (self._structure_name(rep["id"], rep["thickness"])
+                              if structure else None),
+                "shape": g.label, "multiplicity": g.multiplicity,
                 "epsilon": g.eps_min, "eps_mean": g.eps_mean, "eps_max": g.eps_max,
                 "count": g.count, "representative": rep["id"], "seed": rep["seed"],
                 "replica": rep["replica"], "start": rep["start"],
@@ -591,20 +616,22 @@ class Store:
                       exclusion: str | None = None, beads: int | None = None,
                       thickness: float | None = None, problem: str | None = None,
                       settings_hash: str | None = None, *,
-                      rel_tol: float = 0.01) -> list[dict[str, Any]]:
+                      rel_tol: float = 0.01, structure: bool = True) -> list[dict[str, Any]]:
         """The ground state of every knot × exclusion × beads × thickness (a flat table).
 
         States are grouped per ensemble (module docstring); when one knot × exclusion × beads ×
         thickness has several settings, the row shows the ensemble whose ground state has the
         lowest ε (``settings_hash``; ``n_settings`` says how many there were). The filters
         (``knot`` — one name or a list —, ``exclusion``, ``beads``, ``thickness``, ``problem``,
-        ``settings_hash``) select the rows first.
+        ``settings_hash``) select the rows first; ``structure=False`` leaves the ground
+        state's ``structure`` None (see :meth:`states`).
 
         Returns
         -------
         list of dict
             One per knot × exclusion × beads × thickness, in knot-table order: ``knot``,
-            ``exclusion``, ``beads``, ``thickness``, ``w_over_L``, ``state`` (name), ``shape``,
+            ``exclusion``, ``beads``, ``thickness``, ``w_over_L``, ``state`` (name),
+            ``structure`` (its contact structure named, :meth:`states`), ``shape``,
             ``multiplicity``, ``epsilon``, ``eps_mean``, ``count``, ``eps_all``, ``replicas``,
             ``n_states``, ``metastable`` (``"80 147.30 ×3; CB(i=3) 181.20 ×1"``), ``id``,
             ``seed``, ``replica``, ``start``, ``min_segment_distance``, ``converged``,
@@ -619,18 +646,21 @@ class Store:
             by_ensemble[tuple(r[f] for f in ENSEMBLE_FIELDS)].append(r)
         by_model: dict[tuple, list[dict]] = defaultdict(list)
         for ens_key, ens_rows in by_ensemble.items():
-            by_model[ens_key[:4]].append(self._group(ens_rows, rel_tol))
+            by_model[ens_key[:4]].append(self._group(ens_rows, rel_tol, False))
         table = []
         for groups in by_model.values():
             best = min(groups, key=lambda g: (g["ground"]["epsilon"], -g["replicas"],
                                               g["settings_hash"]))
             gs = best["ground"]
+            named = (self._structure_name(gs["representative"], best["thickness"])
+                     if structure else None)
             version = next(r["version"] for r in by_ensemble[
                 tuple(best[f] for f in ENSEMBLE_FIELDS)] if r["id"] == gs["representative"])
             table.append({
                 "knot": best["knot"], "exclusion": best["exclusion"], "beads": best["beads"],
                 "thickness": best["thickness"], "w_over_L": best["w_over_L"],
-                "state": gs["name"], "shape": gs["shape"], "multiplicity": gs["multiplicity"],
+                "state": gs["name"], "structure": named, "shape": gs["shape"],
+                "multiplicity": gs["multiplicity"],
                 "epsilon": gs["epsilon"], "eps_mean": gs["eps_mean"], "count": gs["count"],
                 "eps_all": gs["eps_all"], "eps_by_start": gs["eps_by_start"],
                 "replicas": best["replicas"], "n_states": 1 + len(best["metastable"]),

@@ -51,7 +51,8 @@ from stiffknots.sweeps import (
 )
 
 __all__ = ["DEFAULT_OUT", "DEFAULT_DB", "bead_above_tube", "knot_records", "atlas_input",
-           "json_entry", "family_study", "families_table", "eps_n2_points", "run_atlas"]
+           "json_entry", "family_study", "families_table", "eps_n2_points", "run_atlas",
+           "structure_groups"]
 
 #: Where the pages go by default.
 DEFAULT_OUT = Path("results") / "atlas"
@@ -95,7 +96,8 @@ def knot_records(store: Store, knots: Sequence[str], models: Sequence[Model],
 
 
 def _state_json(s: Mapping, converged: bool | None) -> dict:
-    return {"name": s["name"], "shape": s["shape"], "multiplicity": s["multiplicity"],
+    return {"name": s["name"], "structure": s.get("structure"), "shape": s["shape"],
+            "multiplicity": s["multiplicity"],
             "epsilon": s["epsilon"], "eps_mean": s["eps_mean"], "eps_max": s["eps_max"],
             "count": s["count"], "converged": converged,
             "min_segment_distance": s["min_segment_distance"], "starts": s["starts"],
@@ -166,7 +168,8 @@ def atlas_input(store: Store, rec: Mapping) -> dict:
 
         def state(s: Mapping, converged: bool | None, radius=radius) -> dict:
             return {"shape": s["shape"], "multiplicity": s["multiplicity"],
-                    "epsilon": s["epsilon"], "eps_mean": s["eps_mean"], "count": s["count"],
+                    "structure": s.get("structure"), "epsilon": s["epsilon"],
+                    "eps_mean": s["eps_mean"], "count": s["count"],
                     "converged": converged, "min_segment_distance": s["min_segment_distance"],
                     "coords": store.coords(s["representative"]), "closed": True,
                     "radius": radius}
@@ -212,7 +215,9 @@ def family_study(grounds: Mapping[str, Mapping | None], *, model: str, width: st
         ``knots`` swept with a ground state, ``counts`` by class, ``in_family``,
         ``as_predicted``, ``converged``), ``knots`` (per swept knot: families, predicted and
         found shape, ε, converged), ``mismatch`` (a family's knot whose ground state is not
-        the predicted shape), ``no_family`` (knots in no family, with their shapes),
+        the predicted shape), ``no_family`` (knots in no family, with their shapes and
+        contact structures), ``no_family_structures`` (those knots grouped by the structure
+        of their ground state: :func:`structure_groups`),
         ``eps_n2`` (n → points), ``rule`` (convergence).
     """
     from stiffknots.knots.catalogue import catalogue, get_knot
@@ -223,7 +228,7 @@ def family_study(grounds: Mapping[str, Mapping | None], *, model: str, width: st
         predicted_shape,
     )
 
-    per_knot = []
+    per_knot: list[dict] = []
     for name, g in grounds.items():
         k = get_knot(name)
         pred = predicted_shape(k)
@@ -233,7 +238,8 @@ def family_study(grounds: Mapping[str, Mapping | None], *, model: str, width: st
             "i": k.braid_index, "families": families_of(k),
             "predicted": None if pred is None else _label(*pred),
             "shape": None if found is None else _label(*found),
-            "class": _shape_class(g), "epsilon": None if not g else g["epsilon"],
+            "class": _shape_class(g), "structure": None if not g else g.get("structure"),
+            "epsilon": None if not g else g["epsilon"],
             "converged": None if not g else bool(g.get("converged")),
             "as_predicted": None if (found is None or pred is None) else found == pred,
         })
@@ -255,13 +261,39 @@ def family_study(grounds: Mapping[str, Mapping | None], *, model: str, width: st
     paper = {"n_c < 7": 1.0, "n_c < 9": 0.75}
     for row in cov:
         row["paper"] = paper.get(row["label"])
+    no_family = [r for r in per_knot if not r["families"]]
     return {
         "model": model, "width": width, "rule": CONVERGENCE_RULE,
         "catalogue": cov, "groups": groups, "knots": per_knot,
         "mismatch": [r for r in per_knot if r["as_predicted"] is False],
-        "no_family": [r for r in per_knot if not r["families"]],
+        "no_family": no_family,
+        "no_family_structures": structure_groups(no_family),
         "eps_n2": eps_n2_points(per_knot),
     }
+
+
+def structure_groups(rows: Sequence[Mapping]) -> list[dict]:
+    """The knots of ``rows`` grouped by the contact structure of their ground state
+    (:func:`stiffknots.analysis.structure_name`), largest group first: ``structure``,
+    ``count``, ``knots`` (names, table order), ``shapes`` (class → count), ``epsilon``
+    (lowest and highest). Knots without a result are left out. Names the shapes the
+    classifier calls ``other`` (§V B), so that knots outside the conjectured families that
+    share one structure show as a group."""
+    groups: dict[str, list[Mapping]] = {}
+    for r in rows:
+        if r.get("structure") is None or r.get("epsilon") is None:
+            continue
+        groups.setdefault(str(r["structure"]), []).append(r)
+    out = []
+    for name, members in groups.items():
+        shapes: dict[str, int] = {}
+        for r in members:
+            shapes[str(r["shape"])] = shapes.get(str(r["shape"]), 0) + 1
+        eps = [float(r["epsilon"]) for r in members]
+        out.append({"structure": name, "count": len(members),
+                    "knots": [r["name"] for r in members], "shapes": shapes,
+                    "epsilon": [min(eps), max(eps)]})
+    return sorted(out, key=lambda g: (-g["count"], g["structure"]))
 
 
 def _label(shape: str, multiplicity: int | None) -> str:
@@ -297,8 +329,12 @@ def families_table(study: Mapping) -> dict:
                     + (f", paper {100 * r['paper']:.0f} %" if r.get("paper") is not None
                        else "") + ")"
                     for r in study["catalogue"])
-    no_fam = ", ".join(f"{r['name']} ({r['shape'] or 'no result'})"
-                       for r in study["no_family"]) or "none"
+    groups_nf = study.get("no_family_structures", [])
+    no_fam = (f"{sum(g['count'] for g in groups_nf)} with results, in {len(groups_nf)} contact "
+              "structures (the table below)") if groups_nf else "none with results"
+    unswept = [r["name"] for r in study["no_family"] if r["shape"] is None]
+    if unswept:
+        no_fam += f"; no result yet: {', '.join(unswept)}"
     mism = ", ".join(f"{r['name']} ({r['shape']}, predicted {r['predicted']})"
                      for r in study["mismatch"]) or "none"
     note = (f"Conjectured families (§VI C, §VII, Fig. 8): n = i → CB(i); two-box rational "
@@ -306,8 +342,18 @@ def families_table(study: Mapping) -> dict:
             f"model at {study['width']}. Knots of the catalogue the three families hold — "
             f"{cov}. Swept knots in no family: {no_fam}. Ground state other than the "
             f"family's: {mism}. Converged: {study['rule']}.")
+    structures = {
+        "title": "The knots in no family, by the structure of their ground state",
+        "note": (f"{study['model']} model at {study['width']}. The contact structure of §V B "
+                 "— line-braids of m strands, point-braids (strands meeting tangentially), "
+                 "double and triple points (strands crossing) — read from the ground state's "
+                 "chain; it names the shapes the classifier calls 'other' and groups the "
+                 "knots that share one."),
+        "rows": [{k: g[k] for k in ("structure", "knots", "shapes", "epsilon")}
+                 for g in groups_nf]}
     return {"title": "Conjectured families and the ground states found", "model":
-            study["model"], "groups": groups, "note": note}
+            study["model"], "groups": groups, "note": note,
+            **({"structures": structures} if groups_nf else {})}
 
 
 def _plot_eps_n2(study: Mapping, path: Path) -> Path | None:

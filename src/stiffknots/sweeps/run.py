@@ -202,7 +202,8 @@ def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str
     if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
                        thickness=model.thickness, settings_hash=settings_hash):
         return False
-    st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash)
+    st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash,
+                      structure=False)
     return converged_with_every_start(st)
 
 
