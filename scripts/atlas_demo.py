@@ -7,7 +7,8 @@ Usage::
 
 Writes ``OUT_DIR/index.html`` (with ``knots/``, ``thumbs/``, ``plotly.min.js``) and the
 screenshots ``OUT_DIR/screenshot-index.png`` (the top of the index page),
-``OUT_DIR/screenshot-index-full.png`` (all of it) and
+``OUT_DIR/screenshot-index-full.png`` (all of it), ``OUT_DIR/screenshot-structures.png`` (the
+table of the knots in no family by structure, where the atlas has one) and
 ``OUT_DIR/screenshot-knot.png`` (the page of 4_1 with its 3D view). The chains are synthetic
 (``tests/atlas_support.py``), not annealed results.
 """
@@ -53,11 +54,16 @@ def main(argv: list[str]) -> int:
         page.wait_for_selector("#eps-plot .main-svg")
         page.screenshot(path=str(out / "screenshot-index.png"))
         page.screenshot(path=str(out / "screenshot-index-full.png"), full_page=True)
+        shots = ["screenshot-index.png", "screenshot-index-full.png"]
+        if page.locator("#structures").count():  # the knots in no family, by structure
+            page.locator("#structures-title").scroll_into_view_if_needed()
+            page.screenshot(path=str(out / "screenshot-structures.png"))
+            shots.append("screenshot-structures.png")
         page.goto((out / "knots" / f"{knot}.html").as_uri())
         page.wait_for_selector("#view3d .gl-container canvas")
         time.sleep(0.5)
         page.screenshot(path=str(out / "screenshot-knot.png"), full_page=True)
-    for name in ("screenshot-index.png", "screenshot-index-full.png", "screenshot-knot.png"):
+    for name in [*shots, "screenshot-knot.png"]:
         print(f"wrote {out / name}")
     return 0
 

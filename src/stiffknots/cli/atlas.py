@@ -298,6 +298,13 @@ def _print(d: dict, mods) -> None:
                   f"{fam['width']}): " + ", ".join(f"{k} {v}" for k, v in g["counts"].items())
                   + f"; as the family predicts {g['as_predicted']}, converged "
                   f"{g['converged']}", highlight=False, markup=False)
+    nf = fam.get("no_family_structures") or []
+    if nf:
+        top = "; ".join(f"{g['structure']} {g['count']} ({', '.join(g['knots'][:4])}"
+                        + (", …" if g["count"] > 4 else "") + ")" for g in nf[:3])
+        out.print(f"in no family: {sum(g['count'] for g in nf)} ground states in {len(nf)} "
+                  f"contact structures (§V B); the commonest: {top}", highlight=False,
+                  markup=False)
     conv = ", ".join(f"{k} {c['converged']} of {c['knots']} ({100 * d['converged'][k]:.0f} %)"
                      for k, c in d["converged_counts"].items() if c["knots"])
     out.print(f"converged ({fam['rule']}): {conv or 'no results stored yet'}", highlight=False,

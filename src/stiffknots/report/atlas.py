@@ -716,6 +716,7 @@ td.thumb img { width: 72px; height: 72px; display: block; }
 .m { display: none; }
 .visually-hidden { position: absolute; width: 1px; height: 1px; overflow: hidden;
                    clip: rect(0 0 0 0); white-space: nowrap; }
+#structures td.num { white-space: nowrap; }
 .shape { display: inline-block; min-width: 1.2em; padding: 0 0.35em; border-radius: 3px;
          color: #fff; font-weight: 600; font-size: 0.9em; }
 .meta-list { color: var(--muted); font-size: 0.9em; }
