@@ -103,6 +103,11 @@ def test_atlas_json_shape(tmp_path):
     assert k["multiplicity"] == g["multiplicity"] and k["converged"] == m["converged"]
     assert g["count"] + sum(s["count"] for s in m["metastable"]) == 2
     assert isinstance(k["converged"], bool)
+    with Store(db, create=False) as st:  # its contact structure, named from its chain
+        from stiffknots.analysis import analyse_structure
+
+        best = min(st.replicas(knot="3_1"), key=lambda r: r["epsilon"])
+        assert g["structure"] == analyse_structure(st.coords(best["id"]), d=D).name
     assert k["epsilon"] >= 8 * math.pi**2  # above the lower bound 2π²n² (n = 2)
     sw = d["sweep"]
     assert (sw["jobs"], sw["skipped"], sw["ran"], sw["failed"]) == (2, 0, 2, [])
@@ -158,6 +163,30 @@ def test_atlas_stored_on_an_empty_database(tmp_path):
                         "--stored")
     assert rc == 0, err
     assert "no results stored yet" in " ".join(text.split())
+
+
+def test_atlas_names_the_structures_of_the_knots_in_no_family(tmp_path):
+    """7_4 is in no conjectured family: the summary and families.json name its ground
+    state's contact structure (§V B) and group it."""
+    from stiffknots.analysis.synthetic import four_cage
+
+    bead, = parse_models("bead")
+    db, out = tmp_path / "s.db", tmp_path / "pages"
+    with Store(db) as st:
+        st.put({"knot": "7_4", "exclusion": "bead", "beads": 150, "thickness": bead.thickness,
+                "seed": 0, "replica": 0, "settings": sweep_settings(bead, BUDGETS["small"]),
+                "epsilon": 171.2, "min_segment_distance": 0.5, "wall_seconds": 1.0,
+                "shape": "other", "start": "braid"}, four_cage())
+    args = ("atlas", "--knots", "7_4", "--models", "bead", "--budget", "small", "--out",
+            str(out), "--db", str(db), "--stored")
+    rc, text, err = cli(*args)
+    assert rc == 0, err
+    flat = " ".join(text.split())
+    assert ("in no family: 1 ground states in 1 contact structures (§V B); the commonest: "
+            "2 point-braids 1 (7_4)") in flat, flat
+    fam = json.loads((out / "families.json").read_text())
+    assert fam["no_family_structures"][0]["knots"] == ["7_4"]
+    assert fam["knots"][0]["structure"] == "2 point-braids"
 
 
 # -- the results database ------------------------------------------------------------------
