@@ -121,6 +121,13 @@ def summarise(path: str) -> dict:
                          for f, v in fam_rows.items()},
             "touching_crossings": touching,
         }
+    per_knot: dict[str, dict[str, str | None]] = collections.defaultdict(dict)
+    for g in grounds:
+        per_knot[g["knot"]][g["exclusion"]] = g["structure"]
+    both = sorted((k for k, v in per_knot.items() if len(v) == 2), key=knot_sort_key)
+    same = [k for k in both if len(set(per_knot[k].values())) == 1]
+    out["same_structure_in_both_models"] = {"knots": len(both), "same": len(same),
+                                            "which": same}
     return out
 
 
@@ -182,6 +189,9 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"      {name} ({len(ks)}): "
                           + ", ".join(f"{k} {get_knot(k).conway_notation or ''}".strip()
                                       for k in ks))
+    sb = s["same_structure_in_both_models"]
+    if sb["knots"]:
+        print(f"\nground structure the same in both models: {sb['same']} of {sb['knots']} knots")
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
             json.dump(s, fh, indent=1, ensure_ascii=False)
