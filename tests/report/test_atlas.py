@@ -332,6 +332,8 @@ def test_structures_are_escaped_and_linked(tmp_path, knots):
     idx = write_atlas(tmp_path, [k], families=fam, thumbnails=False)
     html = idx.read_text(encoding="utf-8")
     assert 'title="2 line-braids &lt;m = 2&gt;"' in html
+    # the filter box finds a knot by its structure's words
+    assert re.search(r'data-search-bead="[^"]*2 line-braids &lt;m = 2&gt;', html)
     assert f'<a href="knots/{k["name"]}.html">{k["name"]}</a>, 99_9' in html
     assert '<td class="num">171.20 – 181.50</td>' in html
     page = (tmp_path / "knots" / f"{k['name']}.html").read_text(encoding="utf-8")
