@@ -84,6 +84,12 @@ def test_anneal_json_small(tmp_path):
     # the best chain names its shape (issue: single runs name their shape)
     assert d["shape"] in ("CB", "4C", "80", "other")
     assert (d["multiplicity"] is not None) == (d["shape"] == "CB")
+    # … and its contact structure (§V B), read from the best chain at the run's d
+    from stiffknots.analysis import analyse_structure
+    from stiffknots.formats import load
+
+    best = load(tmp_path / "best.json").coords
+    assert d["structure"] == analyse_structure(best, d=2 ** -0.5).name
 
 
 def test_paper_tiny_writes_report(tmp_path):

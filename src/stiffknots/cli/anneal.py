@@ -184,6 +184,7 @@ def anneal(
     obs = res.best.observables
     d["shape"], d["multiplicity"] = obs["label"], obs["multiplicity"]
     d["shape_reason"] = obs["shape_reason"]
+    d["structure"] = obs.get("structure")
     d["width"] = width
     if checkpoint is not None:
         d["checkpoint_dir"] = str(checkpoint)
@@ -219,6 +220,9 @@ def anneal(
     out.print(f"shape of the best chain: {obs['label']}"
               + (f" (i = {obs['multiplicity']})" if obs["label"] == "CB" else "")
               + f" — {obs['shape_reason']}", markup=False, highlight=False)
+    if obs.get("structure"):
+        out.print(f"its contact structure (§V B): {obs['structure']}", markup=False,
+                  highlight=False)
     out.print(("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
     below = (res.thin_limit.get("excess") or 0.0) < 0

@@ -141,12 +141,14 @@ def default_moves(n_beads: int) -> int:
 def observe_shape(r: Replica, params) -> None:
     """Classify a closed replica's chain (:func:`stiffknots.analysis.classify`, §VII) with the
     exclusion distance of its run; store ``shape`` ('CB2', '4C', '80', 'other'), ``label``,
-    ``multiplicity`` and ``shape_reason`` in its observables."""
+    ``multiplicity``, ``shape_reason`` and ``structure`` (its contact structure named, §V B:
+    :func:`stiffknots.analysis.structure_name`) in its observables."""
     from stiffknots.analysis import classify
 
     s = classify(r.coords, d=params.w if params.exclusion == "tube" else params.d)
     r.observables.update(shape=f"CB{s.multiplicity}" if s.label == "CB" else s.label,
-                         label=s.label, multiplicity=s.multiplicity, shape_reason=s.reason)
+                         label=s.label, multiplicity=s.multiplicity, shape_reason=s.reason,
+                         structure=s.structure.get("name"))
 
 
 def knot_code(coords: np.ndarray, closed: bool = True) -> str:
