@@ -255,6 +255,32 @@ def test_structure_name_counts_and_orders_the_zones(zones, name):
     assert structure_name(zones) == name
 
 
+def _braid(stretches, m=3):
+    return SimpleNamespace(kind="line-braid", multiplicity=m, closed=False,
+                           stretches=stretches)
+
+
+@pytest.mark.parametrize("stretches, hold, m", [
+    ({2: 29.0, 3: 0.0}, 4.2, 2),   # a third strand touches one bead (8_5's ground, N = 150)
+    ({2: 10.0, 3: 7.0}, 4.2, 3),   # three strands that part and meet again (8_18's CB(3))
+    ({2: 10.0, 3: 7.0}, 8.0, 2),   # m = 3 held too short: the longest constant stretch
+    ({2: 10.0, 3: 7.0}, None, 2),
+    ({2: 3.0, 3: 3.0}, 4.2, 3),    # none held: the longest, the larger m on a tie
+])
+def test_a_line_braid_is_named_by_the_strands_it_holds(stretches, hold, m):
+    """A line-braid's m: the largest local multiplicity one strand holds over ``hold``, not
+    the largest anywhere in it."""
+    assert structure_name([_braid(stretches)], hold) == f"line-braid (m = {m})"
+
+
+def test_zone_stretches_are_the_longest_constant_multiplicity_runs():
+    """On a circular braid of i strands every bead has m = i along the whole chain."""
+    st = analyse_structure(torus_braid(3, 150, separation=0.9))
+    (z,) = st.zones
+    assert z.stretches == {3: pytest.approx(150.0, rel=1e-3)}
+    assert st.to_dict()["zones"][0]["stretches"] == {"3": z.stretches[3]}
+
+
 def test_structure_bad_parameters():
     x = regular_polygon(60).coords
     with pytest.raises(ValueError, match="tangent_angle"):

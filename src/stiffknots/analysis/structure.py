@@ -319,6 +319,10 @@ class ContactZone:
         Mean position of its beads.
     closed : bool
         The zone is the whole closed chain.
+    stretches : dict of int to float
+        For each local multiplicity ``m >= 2`` in the zone, the arc length of its longest
+        stretch of constant ``m(s) = m`` along one strand (bond units): a two-strand braid
+        that a third strand touches at one bead holds ``{2: 29.0, 3: 0.0}``.
     """
 
     kind: str
@@ -328,6 +332,7 @@ class ContactZone:
     alignment: float
     centre: np.ndarray
     closed: bool = False
+    stretches: dict[int, float] = field(default_factory=dict)
 
     @property
     def strands(self) -> int:
@@ -338,7 +343,8 @@ class ContactZone:
         return {"kind": self.kind, "runs": [list(r) for r in self.runs],
                 "multiplicity": self.multiplicity, "length": self.length,
                 "alignment": self.alignment, "centre": self.centre.tolist(),
-                "closed": self.closed}
+                "closed": self.closed,
+                "stretches": {str(k): v for k, v in self.stretches.items()}}
 
 
 @dataclass
@@ -454,7 +460,7 @@ class Structure:
     def name(self) -> str:
         """The structure in the words of §V B, e.g. ``"2 line-braids (m = 2) + double
         point"`` (:func:`structure_name`)."""
-        return structure_name(self.zones)
+        return structure_name(self.zones, 3.0 * self.contact_map.cutoff)
 
     def to_dict(self) -> dict:
         return {
@@ -482,7 +488,20 @@ def _counted(count: int, singular: str, plural: str, suffix: str = "") -> str:
     return (f"{singular}{suffix}" if count == 1 else f"{count} {plural}{suffix}")
 
 
-def structure_name(zones: list[ContactZone]) -> str:
+def _braid_multiplicity(z: ContactZone, hold: float | None) -> int:
+    """The multiplicity of a line-braid zone: the largest ``m`` that one of its strands holds
+    constant over at least ``hold`` (in a flat ribbon of three strands the middle one has
+    m = 3 and the outer ones m = 2: it is m = 3; a two-strand braid that a third strand
+    touches at a bead or two stays m = 2), else the ``m`` of its longest constant stretch;
+    without stretches, its largest ``m``."""
+    st = getattr(z, "stretches", None) or {}
+    if not st:
+        return int(z.multiplicity)
+    held = [k for k, v in st.items() if hold is not None and v >= hold]
+    return max(held) if held else max(st, key=lambda k: (st[k], k))
+
+
+def structure_name(zones: list[ContactZone], hold: float | None = None) -> str:
     """Name a structure ``{S}`` (§V B, Figs 5 and 7) by its contact zones, in the paper's
     words: line-braids with their multiplicity ``m``, point-braids, double (triple, …)
     points — e.g. ``"circular line-braid (m = 2)"`` (the trefoil, Fig. 7 a), ``"2
@@ -491,7 +510,13 @@ def structure_name(zones: list[ContactZone]) -> str:
 
     The line-braids come first (highest ``m`` first; ``circular`` when one covers the whole
     closed chain), then the point-braids (``m`` given when more than two strands meet), then
-    the multiple points (by the number of strands meeting). It names the shapes the
+    the multiple points (by the number of strands meeting). A line-braid's ``m`` is the
+    largest local multiplicity one of its strands holds over at least ``hold`` (default of
+    :attr:`Structure.name`: three contact distances, the shortest line-braid
+    :func:`analyse_structure` allows) — a two-strand braid that a third strand touches at a
+    bead or two stays ``m = 2``; a three-strand braid whose strands part and meet again
+    (m(s) = 2 and 3 in turn, as on the N = 150 circular braids CB(3)) is ``m = 3`` — or,
+    where none is held that long, the one held longest. It names the shapes the
     classifier calls ``other`` (:func:`~stiffknots.analysis.shapes.classify`) and sorts them
     into groups of one structure. At a finite width a point-braid of many crossings can be
     long enough (``min_length``, default 0.1 L) to count as a line-braid, and two double
@@ -501,6 +526,9 @@ def structure_name(zones: list[ContactZone]) -> str:
     ----------
     zones : list of ContactZone
         :attr:`Structure.zones`.
+    hold : float, optional
+        Bond units; None: a line-braid is named by the multiplicity of its longest constant
+        stretch.
 
     Returns
     -------
@@ -512,7 +540,7 @@ def structure_name(zones: list[ContactZone]) -> str:
     multis: dict[int, int] = {}
     for z in zones:
         if z.kind == "line-braid":
-            key = (bool(z.closed), int(z.multiplicity))
+            key = (bool(z.closed), _braid_multiplicity(z, hold))
             lines[key] = lines.get(key, 0) + 1
         elif z.kind == "point-braid":
             points[int(z.multiplicity)] = points.get(int(z.multiplicity), 0) + 1
@@ -576,6 +604,12 @@ def _zones(x: np.ndarray, m: np.ndarray, cmap: ContactMap, bonds: np.ndarray,
         run_id[_run_beads(s, ln, n)] = k
     pair_align = np.abs(np.einsum("ij,ij->i", t[cmap.i], t[cmap.j]))
     pair_run = run_id[cmap.i]
+    # the longest stretch of constant m(s) = m ≥ 2 in every contact run (each lies in one)
+    longest: dict[int, dict[int, float]] = {}
+    for s, ln, v in _value_runs(m, closed):
+        if v >= 2:
+            best = longest.setdefault(int(run_id[s]), {})
+            best[v] = max(best.get(v, 0.0), _run_arc_length(s, ln, bonds, n, closed))
     zones = []
     for group in _group_runs(runs, n, cmap):
         zr = [runs[k] for k in group]
@@ -590,8 +624,13 @@ def _zones(x: np.ndarray, m: np.ndarray, cmap: ContactMap, bonds: np.ndarray,
             kind = "point-braid"
         else:
             kind = "multiple-point"
+        stretches: dict[int, float] = {}
+        for k in group:
+            for v, a in longest.get(k, {}).items():
+                stretches[v] = max(stretches.get(v, 0.0), a)
         zones.append(ContactZone(kind, zr, int(m[beads].max()), float(length), align,
-                                 x[beads].mean(axis=0), bool(whole)))
+                                 x[beads].mean(axis=0), bool(whole),
+                                 dict(sorted(stretches.items()))))
     zones.sort(key=lambda z: min(s for s, _ in z.runs))
     return zones
 
