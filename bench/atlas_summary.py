@@ -176,6 +176,14 @@ def main(argv: list[str] | None = None) -> int:
                 shapes = ", ".join(f"{k} {n}" for k, n in v["shapes"].items())
                 pred = "—" if fam == "none" else str(v["as_predicted"])
                 print(f"  | {fam} | {v['knots']} | {pred} | {v['converged']} | {shapes} |")
+        every: dict[str, set[str]] = collections.defaultdict(set)
+        for v in m["families"].values():
+            for name, ks in v["structures"].items():
+                every[name].update(ks)
+        common = sorted(every.items(), key=lambda kv: (-len(kv[1]), kv[0]))
+        print(f"  ground structures (§V B): {sum(len(v) for v in every.values())} knots in "
+              f"{len(common)} structures; the commonest: "
+              + "; ".join(f"{name} {len(ks)}" for name, ks in common[:6]))
         print("  ground structures (§V B), per family — the commonest:")
         for fam in ("n=i", "4C", "80", "none"):
             v = m["families"].get(fam)
