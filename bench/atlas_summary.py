@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import re
 import sys
 
 from stiffknots.knots.catalogue import get_knot
@@ -126,8 +127,28 @@ def summarise(path: str) -> dict:
         per_knot[g["knot"]][g["exclusion"]] = g["structure"]
     both = sorted((k for k, v in per_knot.items() if len(v) == 2), key=knot_sort_key)
     same = [k for k in both if len(set(per_knot[k].values())) == 1]
+    out["two_long_boxes"] = two_long_boxes(grounds)
     out["same_structure_in_both_models"] = {"knots": len(both), "same": len(same),
                                             "which": same}
+    return out
+
+
+TWO_LINE_BRAIDS = "2 line-braids (m = 2) + double point"
+
+
+def two_long_boxes(grounds: list[dict]) -> dict:
+    """Per model: the rational knots (Conway notation ``[a b c …]``, one digit a box) with
+    exactly two twist boxes of ≥ 3 crossings, and how many of their grounds are two
+    line-braids of m = 2 joined at a double point (README, "Naming what the families
+    miss")."""
+    out: dict = {}
+    for g in grounds:
+        m = re.fullmatch(r"\[(\d+)\]", get_knot(g["knot"]).conway_notation or "")
+        if not m or sum(int(c) >= 3 for c in m.group(1)) != 2:
+            continue
+        row = out.setdefault(g["exclusion"], {"knots": 0, "two_line_braids": 0})
+        row["knots"] += 1
+        row["two_line_braids"] += g["structure"] == TWO_LINE_BRAIDS
     return out
 
 
@@ -197,6 +218,9 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"      {name} ({len(ks)}): "
                           + ", ".join(f"{k} {get_knot(k).conway_notation or ''}".strip()
                                       for k in ks))
+    for model, v in s["two_long_boxes"].items():
+        print(f"{model}: rational knots with two twist boxes of ≥ 3 crossings: {v['knots']}, "
+              f"of which {v['two_line_braids']} end as {TWO_LINE_BRAIDS}")
     sb = s["same_structure_in_both_models"]
     if sb["knots"]:
         print(f"\nground structure the same in both models: {sb['same']} of {sb['knots']} knots")
