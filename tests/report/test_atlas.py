@@ -317,6 +317,9 @@ def test_input_errors_say_what_is_wrong(tmp_path, knots):
     fam = {"groups": [], "structures": {"rows": [{"structure": "double point"}]}}
     with pytest.raises(ValueError, match="needs 'structure' .* and 'knots'"):
         write_atlas(tmp_path, knots, families=fam)
+    fam["structures"]["rows"][0]["knots"] = "7_4"  # a name, not a list of names
+    with pytest.raises(ValueError, match="needs 'structure' .* and 'knots'"):
+        write_atlas(tmp_path, knots, families=fam)
     assert not (tmp_path / "index.html").exists()
 
 

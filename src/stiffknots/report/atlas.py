@@ -1165,7 +1165,7 @@ def _structures_html(structures: Any, slugs: Mapping[str, str]) -> str:
                "<th>which</th></tr></thead>\n<tbody>\n")
     for r in structures["rows"]:
         if not isinstance(r, Mapping) or not isinstance(r.get("structure"), str) \
-                or not isinstance(r.get("knots"), Sequence):
+                or not isinstance(r.get("knots"), Sequence) or isinstance(r["knots"], str):
             raise ValueError(f"each structure row needs 'structure' (text) and 'knots' "
                              f"(names), got {r!r}")
         names = [str(n) for n in r["knots"]]
