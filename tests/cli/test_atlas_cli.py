@@ -518,3 +518,29 @@ def test_expected_todo_adds_the_settled_mean_to_every_open_knot():
               ("d", "bead"): {"replicas": 4, "settled": False},  # has them already
               ("e", "bead"): {"replicas": 6, "settled": False}}  # more than the mean: 0
     assert expected_todo(groups, 20, 2) == 22.0
+
+
+def test_expected_todo_takes_the_mean_of_knots_like_the_open_one():
+    """expected_todo: an open (knot, model) expects what settled ones of its model and crossing
+    number needed; without those, the largest smaller crossing number's; then the model's;
+    then all settled ones'."""
+    from stiffknots.sweeps.run import expected_todo
+
+    groups = {("3_1", "bead"): {"replicas": 2, "settled": True, "crossings": 3},    # +0
+              ("8_1", "bead"): {"replicas": 6, "settled": True, "crossings": 8},    # +4
+              ("8_2", "bead"): {"replicas": 8, "settled": True, "crossings": 8},    # +6
+              ("3_1", "tube"): {"replicas": 2, "settled": True, "crossings": 3},    # +0
+              ("8_3", "bead"): {"replicas": 2, "settled": False, "crossings": 8},   # 8's: 5
+              ("9_1", "bead"): {"replicas": 4, "settled": False, "crossings": 9},   # 8's: 3 more
+              ("8_3", "tube"): {"replicas": 2, "settled": False, "crossings": 8}}   # tube 3's: 0
+    assert expected_todo(groups, 10, 2) == 18.0
+    groups[("4_1", "bead")] = {"replicas": 2, "settled": False, "crossings": 4}  # 3's: 0
+    assert expected_todo(groups, 10, 2) == 18.0
+    # a model none of whose knots settled: the mean of all settled ones ((0+4+6+0)/4)
+    groups[("9_1", "wide")] = {"replicas": 2, "settled": False, "crossings": 9}
+    assert expected_todo(groups, 10, 2) == 20.5
+    # the mean over all of a model's settled knots, where crossing numbers are not given:
+    # bead 10/3 beyond the budget's for each open bead knot
+    flat = {k: {"replicas": g["replicas"], "settled": g["settled"]} for k, g in groups.items()
+            if k[1] != "wide"}
+    assert abs(expected_todo(flat, 10, 2) - (10 + 10 / 3 + (10 / 3 - 2) + 10 / 3)) < 1e-12

@@ -51,9 +51,9 @@ class SweepProgress:
 
     Time left is the mean pace so far times the jobs *expected*, not only those planned: a
     (knot, model) not converged gets replicas added, so the plan grows as the sweep goes
-    (:func:`stiffknots.sweeps.run.expected_todo`: the settled ones' mean added replicas for
-    every one still open). Until a first (knot, model) settles it counts the plan alone and
-    says so ("≥")."""
+    (:func:`stiffknots.sweeps.run.expected_todo`: for every one still open, the mean added
+    replicas of the settled ones of its model and crossing number). Until a first (knot,
+    model) settles it counts the plan alone and says so ("≥")."""
 
     def __init__(self, disable: bool = False, console=None):
         console = err if console is None else console

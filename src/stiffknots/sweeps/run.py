@@ -210,18 +210,42 @@ def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str
 def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) -> float:
     """Jobs a sweep is expected to run in all: the ``todo`` planned so far, plus, for every
     (knot, model) not yet settled, the replicas beyond the ``base`` (the budget's) that the
-    settled ones needed on average, less those it already has. A (knot, model) is settled
-    when its replicas have ended and no more will be added (converged, or at
+    settled ones *like it* needed on average, less those it already has. A (knot, model) is
+    settled when its replicas have ended and no more will be added (converged, or at
     ``max_replicas``). Before any is settled, the plan alone (the estimate can only rise).
 
-    ``groups`` maps (knot, model) to ``{"replicas": planned so far, "settled": bool}``.
+    "Like it": the settled ones of the same model and crossing number; where none has
+    settled yet, those of the same model and the largest crossing number below it that has
+    one; else the same model's; else all. A sweep runs its knots in order of crossing number
+    and larger knots tend to need more replicas (the 249-knot atlas run, default budget, own
+    replicas a (knot, model): bead 4.7 at 8 crossings, 5.3 at 9, 5.7 at 10), so one mean over
+    all settled ones reads low. Replayed on that run's stored replicas
+    (``bench/eta_replay.py``): jobs expected after 400, 674, 895 and 1,201 of its 2,256 —
+    1,815, 1,501, 1,270, 1,118 by this rule, 1,659, 1,436, 1,240, 1,031 by one mean of a model;
+    1,856, 1,582, 1,361, 1,055 followed.
+
+    ``groups`` maps (knot, model) to ``{"replicas": planned so far, "settled": bool}`` and,
+    optionally, ``"crossings"`` (the knot's crossing number; without it every knot of a model
+    is alike).
     """
-    settled = [g["replicas"] - base for g in groups.values() if g["settled"]]
-    if not settled:
+    added: dict[tuple[str, int], list[int]] = {}  # (model, crossings) → replicas added
+    for (_, model), g in groups.items():
+        if g["settled"]:
+            added.setdefault((model, g.get("crossings", 0)), []).append(g["replicas"] - base)
+    if not added:
         return float(todo)
-    mean = sum(settled) / len(settled)
-    more = sum(max(0.0, base + mean - g["replicas"]) for g in groups.values()
-               if not g["settled"])
+    everyone = [a for v in added.values() for a in v]
+
+    def mean_like(model: str, crossings: int) -> float:
+        below = [c for (m, c) in added if m == model and c <= crossings]
+        if below:
+            v = added[(model, max(below))]
+        else:
+            v = [a for (m, _), vs in added.items() if m == model for a in vs] or everyone
+        return sum(v) / len(v)
+
+    more = sum(max(0.0, base + mean_like(model, g.get("crossings", 0)) - g["replicas"])
+               for (_, model), g in groups.items() if not g["settled"])
     return todo + more
 
 
@@ -291,10 +315,16 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
     res.skipped = len(jobs) - len(todo)
     # per (knot, model): its model, replicas planned so far, jobs not yet ended
     groups: dict[tuple[str, str], dict] = {}
+
+    def crossings(knot: str) -> int:
+        from stiffknots.knots.catalogue import get_knot
+
+        return get_knot(knot).crossing_number
+
     for j in jobs:
         groups.setdefault(j.group, {"knot": j.knot, "model": j.model,
                                     "replicas": budget.replicas, "open": 0,
-                                    "settled": False})
+                                    "settled": False, "crossings": crossings(j.knot)})
     for j in todo:
         groups[j.group]["open"] += 1
 
