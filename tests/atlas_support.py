@@ -50,6 +50,18 @@ def _state(coords, shape, *, multiplicity=None, count=None, converged=True, widt
     return d
 
 
+def _structure(coords) -> dict:
+    """A state's ``structure`` (named) and ``zones`` (each bead's zone kind), §V B."""
+    import warnings
+
+    from stiffknots.analysis.structure import analyse_structure
+
+    with warnings.catch_warnings():  # the synthetic chains need not obey the bead rule
+        warnings.simplefilter("ignore")
+        st = analyse_structure(coords)
+    return {"structure": st.name, "zones": st.bead_kinds().tolist()}
+
+
 def _wobbly_trefoil(n: int = 150) -> np.ndarray:
     t = np.linspace(0.0, 2.0 * np.pi, 2000, endpoint=False)
     x = np.sin(t) + 2.0 * np.sin(2.0 * t)
@@ -82,7 +94,8 @@ def synthetic_knots(n_beads: int = 150) -> list[dict]:
         {"name": "4_1", "crossing_number": 4, "n": 2, "i": 3, "families": ["4C"],
          "models": {
              "bead": {"width": BEAD_WIDTH, "replicas": 8,
-                      "ground": _state(cage, "4C", count=5, eps_mean_shift=0.4),
+                      "ground": {**_state(cage, "4C", count=5, eps_mean_shift=0.4),
+                                 **_structure(cage)},
                       "metastable": [_state(eighty, "80", count=3, eps_mean_shift=1.1)]},
              "tube": {"replicas": 4,
                       "ground": _state(synthetic.four_cage(n, offset=1.6), "4C", count=4,

@@ -194,6 +194,24 @@ def test_structure_graph_covers_every_bead_once():
         json.dumps(st.to_dict())
 
 
+def test_bead_kinds_mark_each_zone_on_its_beads():
+    """bead_kinds: the cage's two point-braids, the 80's point-braid and double points, the
+    circular braid everywhere a line-braid, the circle nowhere in contact; each code exactly
+    on the beads of its zones' runs."""
+    cases = [(four_cage(), {0, 2}), (eight_plus_circle(600), {0, 2, 3}),
+             (torus_braid(2, 100, separation=0.9), {1}),
+             (regular_polygon(150).coords, {0})]
+    for x, codes in cases:
+        st = analyse_structure(x)
+        k = st.bead_kinds()
+        assert k.shape == (len(x),) and set(np.unique(k).tolist()) == codes
+        for z in st.zones:
+            code = {"line-braid": 1, "point-braid": 2, "multiple-point": 3}[z.kind]
+            assert (k[covered_beads(z.runs, len(x))] == code).all()
+        assert ((k == 0) == (st.multiplicity == 1)).all()  # every contact bead is in a zone
+        assert st.BEAD_KINDS[2] == "point-braid"
+
+
 def test_cage_structure_two_point_braids_four_arcs():
     """Fig. 9b: the two contact zones of the 4-fold cage are point-braids."""
     g = structure_graph(four_cage())

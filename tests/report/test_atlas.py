@@ -294,6 +294,32 @@ def test_the_drawing_radius_reaches_the_3d_view(atlas):
         assert d.min() == pytest.approx(radius, abs=2e-3)
 
 
+def test_zones_reach_the_3d_view_and_bad_ones_are_refused(tmp_path, atlas, knots):
+    """A state's zones (each bead's contact-zone kind, §V B) travel with its mesh, one code a
+    ring, and the page offers the colouring; zones that do not fit the chain are refused."""
+    text = (atlas.parent / "knots" / "4_1.html").read_text(encoding="utf-8")
+    states = _script_json(text, "states-data")
+    ground = next(k for k in knots if k["name"] == "4_1")["models"]["bead"]["ground"]
+    assert states[0]["zones"] == list(ground["zones"]) and len(states[0]["zones"]) == \
+        states[0]["rings"]
+    assert states[1]["zones"] is None  # the 80 was given none
+    assert 'id="colour-select"' in text and "multiple point" in text
+    plain = (atlas.parent / "knots" / "3_1.html").read_text(encoding="utf-8")
+    assert 'id="colour-select"' not in plain  # no state of 3_1 has zones
+    x = np.asarray(ground["coords"])
+    n = len(x)
+    # too few; a code out of range; not integers; a string
+    for zones in ([0] * (n - 1), [0] * (n - 1) + [4], [0.5] * n, "0" * n):
+        bad = {**knots[0], "models": {"bead": {"width": "w", "ground": {
+            "epsilon": 1.0, "coords": x, "zones": zones}}}}
+        with pytest.raises(ValueError, match=rf"zones must be {n} integers \(one per bead"):
+            write_atlas(tmp_path, [bad])
+    lone = {**knots[0], "models": {"bead": {"width": "w", "ground": {
+        "epsilon": 1.0, "zones": [0] * n}}}}
+    with pytest.raises(ValueError, match="need the state's coords"):
+        write_atlas(tmp_path, [lone])
+
+
 def test_input_errors_say_what_is_wrong(tmp_path, knots):
     k = knots[0]
     no_width = {**k, "models": {"bead": {"ground": {"shape": "CB", "epsilon": 79.0}}}}

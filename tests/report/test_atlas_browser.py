@@ -172,6 +172,36 @@ def test_knot_page_renders_each_state_in_3d(page, atlas):
     page.check()
 
 
+def test_knot_page_colours_a_state_by_its_contact_structure(page, atlas):
+    """The colour select: by contact structure the cage's two point-braids show in their
+    colour on grey free strands, with a legend; a state without zones keeps the arclength
+    colours and says so."""
+    p = page.page
+    p.goto((atlas.parent / "knots" / "4_1.html").as_uri())
+    p.wait_for_selector("#view3d.js-plotly-plot .gl-container canvas")
+    p.wait_for_timeout(300)
+    assert p.locator("#zone-legend").is_hidden()
+    arc = p.locator("#view3d").screenshot()
+    p.select_option("#colour-select", "zones")
+    p.wait_for_timeout(300)
+    assert p.locator("#zone-legend").is_visible()
+    assert p.locator("#zone-missing").is_hidden()
+    assert "point-braid" in p.inner_text("#zone-legend")
+    trace = p.locator("#view3d").evaluate(
+        "d => ({cmin: d.data[0].cmin, cmax: d.data[0].cmax, "
+        "codes: Array.from(new Set(d.data[0].intensity)).sort()})")
+    assert trace["cmin"] == -0.5 and trace["cmax"] == 3.5
+    assert trace["codes"] == [0, 2]  # free strands and the two point-braids
+    zones = p.locator("#view3d").screenshot()
+    assert zones != arc and _nonblank_fraction(zones)[0] > 0.01
+    # the metastable 80 has no zones given: coloured along the chain, with a word
+    p.locator("tr.state-row", has_text="metastable 1").click()
+    p.wait_for_timeout(300)
+    assert p.locator("#zone-missing").is_visible()
+    assert p.locator("#view3d").evaluate("d => d.data[0].cmax") == 1
+    page.check()
+
+
 @pytest.mark.slow  # about 1-2 s a page
 def test_every_knot_page_loads_from_disk_without_errors(page, atlas):
     p = page.page

@@ -174,6 +174,11 @@ def test_json_entries_and_atlas_input(store, tmp_path):
     rep = store.replicas(knot="4_1", shape="4C")
     best = min(rep, key=lambda r: r["epsilon"])
     assert np.array_equal(g["coords"], store.coords(best["id"]))
+    # each bead's contact-zone kind, read from the same chain as the structure's name
+    from stiffknots.analysis.structure import analyse_structure
+
+    assert g["zones"] == analyse_structure(g["coords"], True).bead_kinds().tolist()
+    assert set(g["zones"]) == {0, 2}  # the cage: free strands and two point-braids
     from stiffknots.report.atlas import write_atlas
 
     study = family_study({x["name"]: x["models"]["bead"]["ground"]

@@ -456,6 +456,23 @@ class Structure:
             out[z.kind] += 1
         return out
 
+    #: the codes of :meth:`bead_kinds`, in order
+    BEAD_KINDS = ("free strand", "line-braid", "point-braid", "multiple point")
+
+    def bead_kinds(self) -> np.ndarray:
+        """The contact-zone kind each bead lies in, as codes into :attr:`BEAD_KINDS`: 0 on a
+        free strand (``m(s) = 1``, no zone), 1 in a line-braid zone, 2 in a point-braid, 3 in
+        a multiple point (§V B; the zones of :func:`analyse_structure`, every run of a zone,
+        i.e. every strand passing through it). For a picture of the structure: the 3D views
+        of the atlas colour the chain by it."""
+        n = len(self.multiplicity)
+        kinds = np.zeros(n, dtype=np.int8)
+        code = {"line-braid": 1, "point-braid": 2, "multiple-point": 3}
+        for z in self.zones:
+            for start, length in z.runs:
+                kinds[_run_beads(start, length, n)] = code[z.kind]
+        return kinds
+
     @property
     def name(self) -> str:
         """The structure in the words of §V B, e.g. ``"2 line-braids (m = 2) + double

@@ -55,6 +55,10 @@ where a ``STATE`` is a dict::
       "converged": True,                 # optional: True, False or None (unknown)
       "min_segment_distance": 0.48,      # optional: closest approach of two segments
       "coords": array of shape (N, 3),   # optional: the chain (for the 3D view, thumbnail)
+      "zones": [0, 0, 1, 1, 2, ...],     # optional, with coords: per bead, the kind of contact
+                                         #   zone it lies in (0 free strand, 1 line-braid,
+                                         #   2 point-braid, 3 multiple point: Structure.
+                                         #   bead_kinds); the 3D view can colour by it
       "closed": True,                    # optional (default True)
       "radius": 0.354,                   # optional: tube radius of the pictures (bond units;
                                          #   default half the bead distance 1/√2)
@@ -156,6 +160,7 @@ class _State:
     closed: bool
     width: str | None
     radius: float | None
+    zones: np.ndarray | None = None
 
     @property
     def shape_label(self) -> str | None:
@@ -261,6 +266,35 @@ def _coords(v: Any, what: str) -> np.ndarray | None:
     return x
 
 
+#: the kinds of contact zone a bead can lie in (``zones`` of a state; codes 0 … 3), and the
+#: colours the 3D view gives them
+ZONE_KINDS = ("free strand", "line-braid", "point-braid", "multiple point")
+_ZONE_COLOURS = ("#c9c9c9", "#1f77b4", "#ff7f0e", "#d62728")
+#: a plotly colour scale of four flat bands for the codes 0 … 3 over cmin −0.5 … cmax 3.5
+_ZONE_COLORSCALE = [pair for k, c in enumerate(_ZONE_COLOURS)
+                    for pair in ([k / 4, c], [(k + 1) / 4, c])]
+
+
+def _zones(v: Any, coords: np.ndarray | None, what: str) -> np.ndarray | None:
+    if v is None:
+        return None
+    if coords is None:
+        raise ValueError(f"{what}: zones (the kind of contact zone of each bead) need the "
+                         "state's coords")
+    try:
+        z = np.asarray(v)
+    except (TypeError, ValueError):
+        z = np.asarray([None])
+    ok = (z.ndim == 1 and len(z) == len(coords) and np.issubdtype(z.dtype, np.integer)
+          and bool(np.all((z >= 0) & (z < len(ZONE_KINDS)))))
+    if not ok:
+        raise ValueError(f"{what}: zones must be {len(coords)} integers (one per bead of the "
+                         f"coords), each 0 … {len(ZONE_KINDS) - 1} ("
+                         + ", ".join(f"{k} {n}" for k, n in enumerate(ZONE_KINDS))
+                         + f"), got {v!r:.80}")
+    return z.astype(np.int8)
+
+
 def _slug(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._-")
     return s or "knot"
@@ -288,6 +322,7 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> _State:
     radius = _opt_float(d.get("radius"), f"{where}: radius")
     if radius is not None and radius <= 0:
         raise ValueError(f"{where}: the drawing radius must be > 0, got {radius}")
+    coords = _coords(d.get("coords"), where)
     return _State(
         role=role,
         shape=None if shape is None else str(shape),
@@ -299,10 +334,11 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> _State:
         converged=None if conv is None else bool(conv),
         min_segment_distance=_opt_float(d.get("min_segment_distance"),
                                         f"{where}: min_segment_distance"),
-        coords=_coords(d.get("coords"), where),
+        coords=coords,
         closed=bool(d.get("closed", True)),
         width=width,
         radius=radius,
+        zones=_zones(d.get("zones"), coords, where),
     )
 
 
@@ -735,6 +771,10 @@ tr.state-row.active td { background: #e8f0fb; }
 .view-link { color: var(--accent); text-decoration: underline; }
 .view-controls { display: flex; gap: 1em; align-items: center; flex-wrap: wrap; }
 .view-controls select { font: inherit; padding: 0.2em 0.4em; }
+.zone-legend { display: flex; gap: 1.2em; flex-wrap: wrap; margin: 0.4em 0; }
+.zone-legend[hidden], .zone-legend [hidden] { display: none; }
+.zone-legend i { display: inline-block; width: 1.6em; height: 0.8em; margin-right: 0.35em;
+  border-radius: 0.2em; vertical-align: middle; }
 #view-caption { color: var(--muted); font-size: 0.92em; }
 footer { margin-top: 2.5em; color: var(--muted); font-size: 0.85em; }
 """
@@ -876,6 +916,12 @@ _KNOT_JS = r"""
   "use strict";
   var STATES = JSON.parse(document.getElementById("states-data").textContent);
   var COLORSCALE = JSON.parse(document.getElementById("colorscale-data").textContent);
+  var ZONE_COLORSCALE = JSON.parse(
+    document.getElementById("zone-colorscale-data").textContent);
+  var colourSel = document.getElementById("colour-select");
+  var legend = document.getElementById("zone-legend");
+  var missing = document.getElementById("zone-missing");
+  var current = 0;
   var div = document.getElementById("view3d");
   var sel = document.getElementById("state-select");
   var caption = document.getElementById("view-caption");
@@ -892,6 +938,10 @@ _KNOT_JS = r"""
       x[p] = v[3 * q]; y[p] = v[3 * q + 1]; z[p] = v[3 * q + 2];
       c[p] = r < n ? st.t[r] : 1.0;
     }
+    var byZone = colourSel && colourSel.value === "zones" && st.zones;
+    if (byZone) {
+      for (var p2 = 0; p2 < N; p2++) { c[p2] = st.zones[Math.floor(p2 / s) % n]; }
+    }
     var I = [], J = [], K = [];
     for (var k = 0; k < m - 1; k++) {
       for (var j = 0; j < s; j++) {
@@ -906,7 +956,8 @@ _KNOT_JS = r"""
       });
     }
     return {type: "mesh3d", x: x, y: y, z: z, i: I, j: J, k: K, intensity: c,
-            colorscale: COLORSCALE, cmin: 0, cmax: 1, showscale: false, hoverinfo: "skip",
+            colorscale: byZone ? ZONE_COLORSCALE : COLORSCALE, cmin: byZone ? -0.5 : 0,
+            cmax: byZone ? 3.5 : 1, showscale: false, hoverinfo: "skip",
             flatshading: false,
             lighting: {ambient: 0.5, diffuse: 0.7, specular: 0.15, roughness: 0.5,
                        fresnel: 0.1},
@@ -926,7 +977,13 @@ _KNOT_JS = r"""
   function show(k) {
     var st = STATES[k];
     if (!st) return;
+    current = k;
     Plotly.react(div, [meshTrace(st)], layout(st), CONFIG);
+    if (legend) {
+      var on = !!(colourSel && colourSel.value === "zones");
+      legend.hidden = !on;
+      missing.hidden = !on || !!st.zones;
+    }
     sel.value = String(k);
     caption.textContent = st.caption;
     Array.prototype.forEach.call(document.querySelectorAll("tr.state-row"), function (r) {
@@ -934,6 +991,7 @@ _KNOT_JS = r"""
     });
   }
   if (sel) sel.addEventListener("change", function () { show(parseInt(sel.value, 10)); });
+  if (colourSel) colourSel.addEventListener("change", function () { show(current); });
   Array.prototype.forEach.call(document.querySelectorAll("tr.state-row"), function (r) {
     r.addEventListener("click", function () {
       var k = r.getAttribute("data-state");
@@ -1244,6 +1302,7 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
                        f"{named}, ε = {_num(st.epsilon)} at {st.width or 'unknown width'}")
                 states_js.append({**state_mesh(st.coords, closed=st.closed,
                                                radius=st.radius),
+                                  "zones": None if st.zones is None else st.zones.tolist(),
                                   "caption": cap,
                                   "label": f"{mname} — {st.role}: "
                                            f"{st.shape_label or 'unclassified'} "
@@ -1268,16 +1327,29 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
             '<label>State <select id="state-select">'
             + "".join(f'<option value="{j}">{_e(s["label"])}</option>'
                       for j, s in enumerate(states_js))
-            + '</select></label><span id="view-caption"></span></div>\n'
+            + '</select></label>'
+            + ('<label>Colour <select id="colour-select"><option value="arc">along the '
+               'chain</option><option value="zones">by contact structure (§V B)</option>'
+               '</select></label>' if any(s["zones"] is not None for s in states_js) else "")
+            + '<span id="view-caption"></span></div>\n'
             '<div class="view-frame"><div id="view3d"></div></div>\n'
+            '<p class="zone-legend" id="zone-legend" hidden>'
+            + "".join(f'<span><i style="background:{c}"></i>{_e(n)}</span>'
+                      for c, n in zip(_ZONE_COLOURS, ZONE_KINDS, strict=True))
+            + '<span id="zone-missing" hidden>(no contact structure for this state: coloured '
+              "along the chain)</span></p>\n"
             '<p class="figure-note">Drag to turn, scroll to zoom. The tube is drawn with the '
             "radius given with the state, by default half the bead exclusion distance 1/√2 (so "
             "that beads in contact show touching tubes); its colour runs along the "
-            "arclength. Click a row of the tables to show that state.</p>\n</div>\n")
+            "arclength, or, by contact structure, marks the beads of each line-braid, "
+            "point-braid and multiple point (every strand passing through it). Click a row "
+            "of the tables to show that state.</p>\n</div>\n")
         parts.append('<script type="application/json" id="states-data">'
                      + _json_script(states_js) + "</script>\n"
                      '<script type="application/json" id="colorscale-data">'
                      + _json_script(_COLORSCALE) + "</script>\n"
+                     '<script type="application/json" id="zone-colorscale-data">'
+                     + _json_script(_ZONE_COLORSCALE) + "</script>\n"
                      "<script>" + _KNOT_JS + "</script>\n")
     parts.append(f"<footer>stiffknots {_e(__version__)}</footer>\n</main>\n</body>\n</html>\n")
     return "".join(parts)

@@ -154,6 +154,15 @@ def json_entry(rec: Mapping, main_model: str) -> dict:
             "models": models}
 
 
+def _bead_zones(x, d: float) -> list[int]:
+    """The kind of contact zone of each bead of a stored chain (§V B,
+    :meth:`~stiffknots.analysis.structure.Structure.bead_kinds`), for the pages' colouring by
+    structure; only for a chain whose structure the store named (an admissible one)."""
+    from stiffknots.analysis.structure import analyse_structure
+
+    return analyse_structure(x, True, d=d).bead_kinds().tolist()
+
+
 def atlas_input(store: Store, rec: Mapping) -> dict:
     """One knot in the input schema of :func:`stiffknots.report.atlas.write_atlas`, with the
     chain of every state's representative replica."""
@@ -166,13 +175,14 @@ def atlas_input(store: Store, rec: Mapping) -> dict:
         radius = m.thickness / 2 if m.name == "tube" else None
         conv = ensemble_converged(st)
 
-        def state(s: Mapping, converged: bool | None, radius=radius) -> dict:
+        def state(s: Mapping, converged: bool | None, radius=radius, d=m.thickness) -> dict:
+            x = store.coords(s["representative"])
             return {"shape": s["shape"], "multiplicity": s["multiplicity"],
                     "structure": s.get("structure"), "epsilon": s["epsilon"],
                     "eps_mean": s["eps_mean"], "count": s["count"],
                     "converged": converged, "min_segment_distance": s["min_segment_distance"],
-                    "coords": store.coords(s["representative"]), "closed": True,
-                    "radius": radius}
+                    "coords": x, "closed": True, "radius": radius,
+                    "zones": _bead_zones(x, d) if s.get("structure") else None}
 
         models[name] = {"width": m.width()["text"], "replicas": st["replicas"],
                         "ground": state(st["ground"], conv),
