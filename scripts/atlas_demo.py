@@ -9,8 +9,10 @@ Writes ``OUT_DIR/index.html`` (with ``knots/``, ``thumbs/``, ``plotly.min.js``) 
 screenshots ``OUT_DIR/screenshot-index.png`` (the top of the index page),
 ``OUT_DIR/screenshot-index-full.png`` (all of it), ``OUT_DIR/screenshot-structures.png`` (the
 table of the knots in no family by structure, where the atlas has one) and
-``OUT_DIR/screenshot-knot.png`` (the page of 4_1 with its 3D view). The chains are synthetic
-(``tests/atlas_support.py``), not annealed results.
+``OUT_DIR/screenshot-knot.png`` (the page of 4_1 with its 3D view), and, where a state of
+that page has its contact structure, ``OUT_DIR/screenshot-knot-structure.png`` (its 3D view
+coloured by contact structure). The chains are synthetic (``tests/atlas_support.py``), not
+annealed results.
 """
 
 from __future__ import annotations
@@ -63,7 +65,13 @@ def main(argv: list[str]) -> int:
         page.wait_for_selector("#view3d .gl-container canvas")
         time.sleep(0.5)
         page.screenshot(path=str(out / "screenshot-knot.png"), full_page=True)
-    for name in [*shots, "screenshot-knot.png"]:
+        shots.append("screenshot-knot.png")
+        if page.locator("#colour-select").count():  # coloured by contact structure (§V B)
+            page.select_option("#colour-select", "zones")
+            time.sleep(0.5)
+            page.locator(".viewer").screenshot(path=str(out / "screenshot-knot-structure.png"))
+            shots.append("screenshot-knot-structure.png")
+    for name in shots:
         print(f"wrote {out / name}")
     return 0
 

@@ -149,6 +149,16 @@ def _nonblank_fraction(png: bytes) -> tuple[float, int]:
     return float(ink.mean()), colours
 
 
+def _grey_fraction(png: bytes) -> float:
+    """The fraction of the drawn (non-white) pixels that are grey (no hue)."""
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(io.BytesIO(png))[..., :3]
+    ink = np.any(img < 0.9, axis=-1)
+    spread = img.max(axis=-1) - img.min(axis=-1)
+    return float((spread[ink] < 0.08).mean())
+
+
 def test_knot_page_renders_each_state_in_3d(page, atlas):
     p = page.page
     p.goto((atlas.parent / "knots" / "4_1.html").as_uri())
@@ -187,18 +197,23 @@ def test_knot_page_colours_a_state_by_its_contact_structure(page, atlas):
     assert p.locator("#zone-legend").is_visible()
     assert p.locator("#zone-missing").is_hidden()
     assert "point-braid" in p.inner_text("#zone-legend")
-    trace = p.locator("#view3d").evaluate(
-        "d => ({cmin: d.data[0].cmin, cmax: d.data[0].cmax, "
-        "codes: Array.from(new Set(d.data[0].intensity)).sort()})")
-    assert trace["cmin"] == -0.5 and trace["cmax"] == 3.5
-    assert trace["codes"] == [0, 2]  # free strands and the two point-braids
+    faces = p.locator("#view3d").evaluate(
+        "d => ({n: d.data[0].i.length, intensity: d.data[0].intensity || null, "
+        "colours: Array.from(new Set(d.data[0].facecolor)).sort()})")
+    assert faces["intensity"] is None
+    # one flat colour a face: free strands (grey) and the two point-braids (orange)
+    assert faces["colours"] == ["#c9c9c9", "#ff7f0e"]
     zones = p.locator("#view3d").screenshot()
     assert zones != arc and _nonblank_fraction(zones)[0] > 0.01
+    # drawn as given: the free strands grey (the arclength colours are hues)
+    assert _grey_fraction(arc) < 0.2 < 0.5 < _grey_fraction(zones), (
+        _grey_fraction(arc), _grey_fraction(zones))
     # the metastable 80 has no zones given: coloured along the chain, with a word
     p.locator("tr.state-row", has_text="metastable 1").click()
     p.wait_for_timeout(300)
     assert p.locator("#zone-missing").is_visible()
-    assert p.locator("#view3d").evaluate("d => d.data[0].cmax") == 1
+    assert p.locator("#view3d").evaluate("d => [d.data[0].cmax, d.data[0].facecolor]") == [
+        1, None]
     page.check()
 
 

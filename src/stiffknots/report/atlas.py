@@ -270,9 +270,6 @@ def _coords(v: Any, what: str) -> np.ndarray | None:
 #: colours the 3D view gives them
 ZONE_KINDS = ("free strand", "line-braid", "point-braid", "multiple point")
 _ZONE_COLOURS = ("#c9c9c9", "#1f77b4", "#ff7f0e", "#d62728")
-#: a plotly colour scale of four flat bands for the codes 0 … 3 over cmin −0.5 … cmax 3.5
-_ZONE_COLORSCALE = [pair for k, c in enumerate(_ZONE_COLOURS)
-                    for pair in ([k / 4, c], [(k + 1) / 4, c])]
 
 
 def _zones(v: Any, coords: np.ndarray | None, what: str) -> np.ndarray | None:
@@ -916,8 +913,7 @@ _KNOT_JS = r"""
   "use strict";
   var STATES = JSON.parse(document.getElementById("states-data").textContent);
   var COLORSCALE = JSON.parse(document.getElementById("colorscale-data").textContent);
-  var ZONE_COLORSCALE = JSON.parse(
-    document.getElementById("zone-colorscale-data").textContent);
+  var ZONE_COLOURS = JSON.parse(document.getElementById("zone-colours-data").textContent);
   var colourSel = document.getElementById("colour-select");
   var legend = document.getElementById("zone-legend");
   var missing = document.getElementById("zone-missing");
@@ -938,32 +934,38 @@ _KNOT_JS = r"""
       x[p] = v[3 * q]; y[p] = v[3 * q + 1]; z[p] = v[3 * q + 2];
       c[p] = r < n ? st.t[r] : 1.0;
     }
+    // by contact structure: one flat colour a face (no blend through the other kinds'
+    // colours), the larger code of the two beads of its bond, so a one-bead zone shows
     var byZone = colourSel && colourSel.value === "zones" && st.zones;
-    if (byZone) {
-      for (var p2 = 0; p2 < N; p2++) { c[p2] = st.zones[Math.floor(p2 / s) % n]; }
-    }
-    var I = [], J = [], K = [];
+    var I = [], J = [], K = [], F = [];
     for (var k = 0; k < m - 1; k++) {
+      var fc = byZone ? ZONE_COLOURS[Math.max(st.zones[k % n], st.zones[(k + 1) % n])] : null;
       for (var j = 0; j < s; j++) {
         var j1 = (j + 1) % s;
         var a = k * s + j, b = k * s + j1, cc = (k + 1) * s + j1, d = (k + 1) * s + j;
         I.push(a, a); J.push(cc, d); K.push(b, cc);
+        if (byZone) F.push(fc, fc);
       }
     }
     if (!st.closed) {  // flat end caps as triangle fans
       [0, n - 1].forEach(function (r) {
-        for (var j = 1; j < s - 1; j++) { I.push(r * s); J.push(r * s + j); K.push(r * s + j + 1); }
+        for (var j = 1; j < s - 1; j++) {
+          I.push(r * s); J.push(r * s + j); K.push(r * s + j + 1);
+          if (byZone) F.push(ZONE_COLOURS[st.zones[r]]);
+        }
       });
     }
-    return {type: "mesh3d", x: x, y: y, z: z, i: I, j: J, k: K, intensity: c,
-            colorscale: byZone ? ZONE_COLORSCALE : COLORSCALE, cmin: byZone ? -0.5 : 0,
-            cmax: byZone ? 3.5 : 1, showscale: false, hoverinfo: "skip",
+    var colour = byZone ? {facecolor: F}
+      : {intensity: c, colorscale: COLORSCALE, cmin: 0, cmax: 1};
+    return Object.assign({type: "mesh3d", x: x, y: y, z: z, i: I, j: J, k: K,
+            showscale: false, hoverinfo: "skip",
             flatshading: false,
             lighting: {ambient: 0.5, diffuse: 0.7, specular: 0.15, roughness: 0.5,
                        fresnel: 0.1},
             // plotly's mesh3d lights the side facing away from lightposition: put the light
             // opposite the camera, so that the side seen first is lit
-            lightposition: {x: -1e5 * st.eye.x, y: -1e5 * st.eye.y, z: -1e5 * st.eye.z}};
+            lightposition: {x: -1e5 * st.eye.x, y: -1e5 * st.eye.y, z: -1e5 * st.eye.z}},
+            colour);
   }
   function layout(st) {
     function axis(k) { return {visible: false, showspikes: false, range: st.range[k]}; }
@@ -978,7 +980,9 @@ _KNOT_JS = r"""
     var st = STATES[k];
     if (!st) return;
     current = k;
-    Plotly.react(div, [meshTrace(st)], layout(st), CONFIG);
+    // a new plot, not Plotly.react: react keeps a mesh's old colouring when it switches
+    // between intensity and face colours
+    Plotly.newPlot(div, [meshTrace(st)], layout(st), CONFIG);
     if (legend) {
       var on = !!(colourSel && colourSel.value === "zones");
       legend.hidden = !on;
@@ -1348,8 +1352,8 @@ def _knot_page(k: _Knot, models: list[tuple[str, str]], default: str | None, tit
                      + _json_script(states_js) + "</script>\n"
                      '<script type="application/json" id="colorscale-data">'
                      + _json_script(_COLORSCALE) + "</script>\n"
-                     '<script type="application/json" id="zone-colorscale-data">'
-                     + _json_script(_ZONE_COLORSCALE) + "</script>\n"
+                     '<script type="application/json" id="zone-colours-data">'
+                     + _json_script(list(_ZONE_COLOURS)) + "</script>\n"
                      "<script>" + _KNOT_JS + "</script>\n")
     parts.append(f"<footer>stiffknots {_e(__version__)}</footer>\n</main>\n</body>\n</html>\n")
     return "".join(parts)
