@@ -182,8 +182,9 @@ def atlas(
              "tube (diameter --w).")] = "bead,tube",
     budget: Annotated[str, typer.Option(
         help="Replicas × moves per knot and model: tiny (2 × 0.2 M, a smoke test), small "
-             "(2 × 5 M), default (2 × 15 M, up to 6 replicas until converged) or full "
-             "(4 × 60 M, up to 12).")] = "default",
+             "(2 × 5 M), default (2 × 15 M, up to 6 replicas until converged, then up to 2 "
+             "continuation legs for the tube model) or full (4 × 60 M, up to 12, 2 legs).")
+    ] = "default",
     out_dir: Annotated[str, typer.Option(
         "--out", help="Folder of the atlas pages.")] = "results/atlas",
     db: Annotated[str, typer.Option(

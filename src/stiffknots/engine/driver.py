@@ -799,11 +799,15 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
                        resumed_from_step=resumed)
 
 
-def replica_seeds(seed: int, replicas: int) -> list[int]:
-    """Independent per-replica seeds derived from one user seed (numpy SeedSequence)."""
-    ss = np.random.SeedSequence(int(seed))
-    return [int(s.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
-            for s in ss.spawn(replicas)]
+def replica_seeds(seed: int, replicas: int, first: int = 0) -> list[int]:
+    """Independent per-replica seeds derived from one user seed (numpy SeedSequence): those
+    of replicas ``first`` … ``replicas − 1``. Replica r's is the r-th child's of
+    ``SeedSequence(seed).spawn`` (spawn key (r,)), computed without spawning the r before it,
+    so a replica numbered 1,500,000 (a sweep's continuation leg) costs as little as replica 0.
+    """
+    return [int(np.random.SeedSequence(int(seed), spawn_key=(r,))
+                .generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+            for r in range(int(first), int(replicas))]
 
 
 def default_workers(replicas: int) -> int:

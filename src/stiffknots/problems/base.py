@@ -481,7 +481,8 @@ class Problem:
         ``replicas``); replica r's seed is the r-th seed derived from the problem's seed,
         whatever the round it runs in. ``polish_params``, ``search``: see :class:`Job`."""
         n = self.replicas if count is None else count
-        seeds = replica_seeds(self.seed, first + n)
+        seeds = dict(zip(range(first, first + n), replica_seeds(self.seed, first + n, first),
+                         strict=True))
         return [Job(replica=r, seed=seeds[r], coords=coords(r), settings=settings,
                     knot=self.knot_name, start=start(r), start_code=code(r),
                     polish=self.polish, polish_params=polish_params, search=search,

@@ -25,7 +25,7 @@ from stiffknots.store.keys import EXCLUSIONS, ReplicaKey, canonical_json, settin
 from stiffknots.store.schema import COLUMNS
 
 __all__ = ["SHAPES", "REQUIRED", "OPTIONAL", "normalise_row", "decode_row", "coords_blob",
-           "blob_coords", "row_from_replica"]
+           "blob_coords", "row_from_replica", "search_of"]
 
 #: Shape classes (the labels of :func:`stiffknots.analysis.shapes.classify`).
 SHAPES = ("CB", "4C", "80", "other")
@@ -293,3 +293,13 @@ def row_from_replica(result: Any, *, knot: str, exclusion: str, thickness: float
     row["extra"] = {**extra, **dict(fields.pop("extra", {}) or {})}
     row.update(fields)
     return row, coords
+
+
+def search_of(row: Mapping[str, Any]) -> int:
+    """The search (independent search of an ensemble) a stored replica belongs to: its
+    ``extra["search"]`` where it has one — a sweep's continuation leg, the search it continued
+    (:mod:`stiffknots.sweeps.legs`); a seeded replica, the tube search it comes from — else
+    its own replica number."""
+    extra = row.get("extra") or {}
+    s = extra.get("search") if isinstance(extra, Mapping) else None
+    return int(s) if s is not None else int(row["replica"])

@@ -56,7 +56,7 @@ from stiffknots.store.keys import (
     thickness_key,
 )
 from stiffknots.store.keys import settings_hash as hash_settings
-from stiffknots.store.rows import blob_coords, decode_row, normalise_row
+from stiffknots.store.rows import blob_coords, decode_row, normalise_row, search_of
 from stiffknots.store.schema import (
     APPLICATION_ID,
     COLUMNS,
@@ -523,7 +523,9 @@ class Store:
             its ``seed``, ``replica``, ``start``, ``min_segment_distance``, ``converged``,
             ``knot_verified``; ``converged_count``; ``eps_all`` (every member's ε,
             increasing); ``starts`` (start → count); ``eps_by_start`` (start → its members'
-            ε, increasing); ``ids``.
+            ε, increasing); ``eps_by_search`` (search → its members' lowest ε; a sweep's
+            continuation leg belongs to the search it continued:
+            :func:`~stiffknots.store.rows.search_of`); ``ids``.
 
         Raises
         ------
@@ -603,6 +605,7 @@ class Store:
                                  for st in dict.fromkeys(m["start"] or "unknown"
                                                          for m in members)},
                 "ids": [m["id"] for m in members],
+                "eps_by_search": _eps_by_search(members),
             })
         first = rows[0]
         return {"knot": first["knot"], "exclusion": first["exclusion"], "beads": first["beads"],
@@ -663,6 +666,7 @@ class Store:
                 "multiplicity": gs["multiplicity"],
                 "epsilon": gs["epsilon"], "eps_mean": gs["eps_mean"], "count": gs["count"],
                 "eps_all": gs["eps_all"], "eps_by_start": gs["eps_by_start"],
+                "eps_by_search": gs["eps_by_search"],
                 "replicas": best["replicas"], "n_states": 1 + len(best["metastable"]),
                 "metastable": "; ".join(f"{s['name']} {s['epsilon']:.2f} ×{s['count']}"
                                         for s in best["metastable"]),
@@ -712,6 +716,16 @@ class Store:
     def meta(self) -> dict[str, str]:
         """The ``meta`` table (``schema_version``, ``created``, ``created_by``)."""
         return dict(self._query("SELECT key, value FROM meta"))
+
+
+def _eps_by_search(members: Iterable[Mapping[str, Any]]) -> dict[str, float]:
+    """A state's members by search (:func:`~stiffknots.store.rows.search_of`): search →
+    the lowest ε of its members in the state (keys as text, for JSON)."""
+    out: dict[str, float] = {}
+    for m in members:
+        k = str(search_of(m))
+        out[k] = min(out.get(k, float("inf")), float(m["epsilon"]))
+    return out
 
 
 def _ensemble_order(d: Mapping[str, Any]) -> tuple:

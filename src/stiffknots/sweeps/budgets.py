@@ -7,16 +7,19 @@ part of every replica's settings, hence of its store key: two budgets never shar
 while a budget with more replicas of the same moves reuses the replicas a smaller one stored
 (replica r's seed does not depend on the number of replicas). A (knot, model) whose ground
 state has not converged once its replicas have ended gets two more, up to ``max_replicas``
-(:func:`stiffknots.sweeps.run.run_sweep`): easy knots stop at two, hard ones get more.
+(:func:`stiffknots.sweeps.run.run_sweep`): easy knots stop at two, hard ones get more; a tube
+ensemble still not converged then gets up to ``legs`` continuation legs, each continuing its
+second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
 
-=========  ========  ============  ============  =========================================
-budget     replicas  moves         most          CPU seconds per (knot, model), N = 150
-=========  ========  ============  ============  =========================================
-tiny       2         200,000       2             ≈ 1 — a smoke test of the machinery
-small      2         5,000,000     2             ≈ 10
-default    2         15,000,000    6             ≈ 20 converged at 2, ≈ 60 at 6 replicas
-full       4         60,000,000    12            ≈ 160 at 4 replicas, ≈ 480 at 12
-=========  ========  ============  ============  =========================================
+=========  ========  ============  ============  ====  ====================================
+budget     replicas  moves         most          legs  CPU seconds per (knot, model), N = 150
+=========  ========  ============  ============  ====  ====================================
+tiny       2         200,000       2             0     ≈ 1 — a smoke test of the machinery
+small      2         5,000,000     2             0     ≈ 10
+default    2         15,000,000    6             2     ≈ 20 converged at 2, ≈ 60 at 6 replicas
+                                                       (a tube leg: ≈ 10–45 more)
+full       4         60,000,000    12            2     ≈ 160 at 4 replicas, ≈ 480 at 12
+=========  ========  ============  ============  ====  ====================================
 
 Measurements behind the default row (2026-11-29, ``bench/defaults_survey.py``: the same
 replicas — 15 M moves, polished — through ``stiffknots anneal``, 35 knots through 8
@@ -59,12 +62,16 @@ class Budget:
     max_replicas : int or None
         Replicas are added, two at a time, to a (knot, model) whose ground state has not
         converged, up to this many in all (None: ``replicas``, none added).
+    legs : int
+        Then, while it has not converged, up to this many continuation legs, one at a time,
+        each continuing the second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
     """
 
     name: str
     replicas: int
     moves: int
     max_replicas: int | None = None
+    legs: int = 0
 
     def validate(self) -> Budget:
         """Return self, or raise :class:`InvalidParameter` for a bad count (the limits of
@@ -79,14 +86,14 @@ class Budget:
 
     def as_dict(self) -> dict:
         return {"name": self.name, "replicas": self.replicas, "moves": self.moves,
-                "max_replicas": self.max_replicas or self.replicas}
+                "max_replicas": self.max_replicas or self.replicas, "legs": self.legs}
 
 
 BUDGETS: dict[str, Budget] = {
     "tiny": Budget("tiny", 2, 200_000),
     "small": Budget("small", 2, 5_000_000),
-    "default": Budget("default", 2, 15_000_000, max_replicas=6),
-    "full": Budget("full", 4, 60_000_000, max_replicas=12),
+    "default": Budget("default", 2, 15_000_000, max_replicas=6, legs=2),
+    "full": Budget("full", 4, 60_000_000, max_replicas=12, legs=2),
 }
 
 

@@ -210,6 +210,17 @@ def _problem_jobs(knot: str, model: Any, budget: Any, seed: int, settings_text: 
     return build_jobs(knot, model, budget, seed, json.loads(settings_text), start)
 
 
+@functools.lru_cache(maxsize=8)
+def _problem(knot: str, model: Any, budget: Any, seed: int, settings_text: str) -> Any:
+    """The (knot, model) problem whose searches a continuation leg continues, built once per
+    worker process."""
+    import json
+
+    from stiffknots.sweeps.plan import build_problem
+
+    return build_problem(knot, model, budget, seed, json.loads(settings_text))
+
+
 def run_task(job: Any, budget: Any) -> Any:
     """Worker: build the (knot, model) problem of a :class:`~stiffknots.sweeps.plan.SweepJob`
     (:func:`~stiffknots.sweeps.plan.build_jobs`: ClosedAnneal's validation, starts and start
@@ -228,10 +239,13 @@ def run_task(job: Any, budget: Any) -> Any:
     from stiffknots.problems.pool import reporting_to
     from stiffknots.store import canonical_json
 
-    jobs = _problem_jobs(job.knot, job.model, budget, job.seed, canonical_json(job.settings),
-                         job.start)
-    pjob = jobs[job.replica]
-    pjob = replace(pjob, coords=pjob.coords.copy())  # the cached start stays untouched
+    if job.parent is not None:
+        pjob = _leg(job, budget)
+    else:
+        jobs = _problem_jobs(job.knot, job.model, budget, job.seed,
+                             canonical_json(job.settings), job.start)
+        pjob = jobs[job.replica]
+        pjob = replace(pjob, coords=pjob.coords.copy())  # the cached start stays untouched
     try:
         import_distributed()
         from distributed import get_worker
@@ -253,4 +267,29 @@ def run_task(job: Any, budget: Any) -> Any:
                                           "pid": os.getpid()})
 
     with reporting_to(send):
-        return run_job(pjob)
+        r = run_job(pjob)
+    if job.parent is not None:  # a leg keeps its search's start (a seeded one stays seeded)
+        r.start = job.parent["start"]
+    return r
+
+
+def _leg(job: Any, budget: Any) -> Any:
+    """The problem job of a continuation leg (:mod:`stiffknots.sweeps.legs`): the solver's
+    :meth:`~stiffknots.problems.closed.ClosedAnneal.continue_jobs` from the parent's chain,
+    replica number ``job.replica`` (its seed derives from it). A parent whose start is not
+    one of the problem's (a seeded replica's ``tube-ground``) is verified against the
+    problem's first start: every start is an embedding of the same knot."""
+    from types import SimpleNamespace
+
+    from stiffknots.store import canonical_json
+
+    problem = _problem(job.knot, job.model, budget, job.seed, canonical_json(job.settings))
+    start = job.parent["start"]
+    if start not in problem.codes:
+        start = problem.starts[0]
+    parent = SimpleNamespace(coords=job.parent["coords"].copy(), start=start)
+    legs = problem.continue_jobs([parent], job.replica)
+    if not legs:
+        raise RuntimeError(f"{job.id}: this problem cannot continue a search (a bug in "
+                           "stiffknots, please report it)")
+    return legs[0]

@@ -3,9 +3,11 @@
 The rule is the solver's (:func:`stiffknots.problems.base.verdict`): the ground state of an
 ensemble — the replicas of one knot, model, width, N and settings (:meth:`Store.states
 <stiffknots.store.sqlite.Store.states>`) — is *converged* when at least
-:data:`MIN_REPLICAS` = 2 replicas reached it: the same shape class and multiplicity (§VII),
-ε within :data:`REL_TOL` = 0.1 % of the lowest (every replica is polished to its local
-minimum, so replicas of one minimum agree far better than that): two independent searches,
+:data:`MIN_REPLICAS` = 2 independent searches reached it (a continuation leg counts with
+the search it continued, :mod:`stiffknots.sweeps.legs`): the same shape class and
+multiplicity (§VII), ε within :data:`REL_TOL` = 0.1 % of the lowest (every replica is
+polished to its local minimum, so replicas of one minimum agree far better than that): two
+independent searches,
 usually from different starts, agreeing on the lowest state found — and at least one of them
 the ensemble's own Monte Carlo search, not a bead replica seeded from a tube replica
 (:mod:`stiffknots.sweeps.cross`, ``start = "tube-ground"``). It says nothing about states no
@@ -50,15 +52,20 @@ RULE = (f"ground state reached by ≥ {MIN_REPLICAS} replicas (same shape) with 
 
 
 def hits(ground: Mapping[str, Any] | None) -> int:
-    """The replicas of a ground state within :data:`REL_TOL` of its lowest ε (its members'
-    ``eps_all``; a state without it counts all its ``count`` members if its ``eps_max`` is
-    within the tolerance, else only the lowest one)."""
+    """The searches that reached a ground state: its members within :data:`REL_TOL` of its
+    lowest ε, each search counted once (its ``eps_by_search``: a continuation leg and the
+    search it continued are one search, :mod:`stiffknots.sweeps.legs`); a state without it
+    counts its members (``eps_all``), and one without that all its ``count`` members if its
+    ``eps_max`` is within the tolerance, else only the lowest one."""
     if not ground:
         return 0
     lo = ground.get("epsilon")
     if lo is None or float(lo) <= 0:
         return 0
     lo = float(lo)
+    by_search = ground.get("eps_by_search")
+    if by_search is not None:
+        return sum(1 for e in by_search.values() if float(e) - lo <= REL_TOL * lo)
     eps = ground.get("eps_all")
     if eps is not None:
         return sum(1 for e in eps if float(e) - lo <= REL_TOL * lo)

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from stiffknots._version import __version__
-from stiffknots.store import ReplicaKey, Store, row_from_replica, settings_hash
+from stiffknots.store import ReplicaKey, Store, row_from_replica, search_of, settings_hash
 from stiffknots.sweeps.convergence import SEEDED_START  # its ``start``
 from stiffknots.sweeps.models import Model
 
@@ -165,6 +165,9 @@ def _seed_one(store: Store, knot: str, bead: Model, tube: Model, low: Mapping[st
         settings=bset, beads=bead.beads, shape=shape.label, multiplicity=shape.multiplicity,
         problem=bset["problem"],
         extra={"model": bead.name, "budget": budget, "width": bead.width()["text"],
-               "shape_reason": shape.reason})
+               "shape_reason": shape.reason,
+               # one search with the tube search it comes from: a tube leg's seed and its
+               # parent's are not two opinions (:mod:`stiffknots.sweeps.legs`)
+               "search": SEEDED_REPLICA + search_of(low)})
     entry.update(epsilon=eps, written=bool(store.put(row, coords)))
     return entry

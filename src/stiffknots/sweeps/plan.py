@@ -41,7 +41,7 @@ from stiffknots.sweeps.models import Model, for_beads
 
 __all__ = ["PROBLEM", "START_POLICY", "FAVOUR_FROM", "SweepJob", "sweep_settings",
            "resolve_knots", "plan_sweep", "pending", "sweep_starts", "favoured_start",
-           "build_jobs"]
+           "build_jobs", "build_problem"]
 
 #: The problem every sweep solves (``settings["problem"]``).
 PROBLEM = "anneal"
@@ -86,6 +86,8 @@ class SweepJob:
     start : str or None
         The embedding it starts from when it is not its round-robin one (an added replica,
         :func:`favoured_start`); None: round-robin.
+    parent : dict or None
+        A continuation leg's parent replica (:mod:`stiffknots.sweeps.legs`).
     """
 
     knot: str
@@ -95,10 +97,20 @@ class SweepJob:
     settings: dict = field(compare=False, hash=False, repr=False)
     key: ReplicaKey = field(compare=False, hash=False, repr=False)
     start: str | None = field(default=None, compare=False, hash=False)
+    #: a continuation leg's parent (:func:`stiffknots.sweeps.legs.leg_job`): its store
+    #: ``id``, ``replica``, ``search``, ``start``, ``epsilon`` and ``coords``; None for a
+    #: replica that starts from an embedding
+    parent: dict | None = field(default=None, compare=False, hash=False, repr=False)
 
     @property
     def id(self) -> str:
-        """``knot/model/replica`` (for messages)."""
+        """``knot/model/replica`` (for messages); a continuation leg's says which search it
+        continues, e.g. ``7_4/tube/leg 1 of r3``."""
+        if self.parent is not None:
+            from stiffknots.sweeps.legs import LEG_REPLICA
+
+            return (f"{self.knot}/{self.model.name}/leg {self.replica - LEG_REPLICA + 1} of "
+                    f"r{self.parent['search']}")
         return f"{self.knot}/{self.model.name}/r{self.replica}"
 
     @property
@@ -223,7 +235,15 @@ def favoured_start(store: Store, job: SweepJob, before: int) -> str | None:
 
 def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
                settings: Mapping[str, Any], start: str | None = None) -> dict[int, Job]:
-    """The problem's jobs of one (knot, model): replica → :class:`~stiffknots.problems.base.Job`.
+    """The problem's jobs of one (knot, model): replica → :class:`~stiffknots.problems.base.Job`
+    (:func:`build_problem`'s jobs)."""
+    return {j.replica: j for j in build_problem(knot, model, budget, seed, settings,
+                                                start).jobs()}
+
+
+def build_problem(knot: str, model: Model, budget: Budget, seed: int,
+                  settings: Mapping[str, Any], start: str | None = None) -> Any:
+    """The problem of one (knot, model): a :class:`~stiffknots.problems.closed.ClosedAnneal`.
 
     Builds the :class:`~stiffknots.problems.closed.ClosedAnneal` problem (starts, their
     HOMFLY-PT polynomials) and checks that its settings are those of the key. ``start``: every
@@ -258,4 +278,4 @@ def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
     if canonical_json(problem.settings.as_dict()) != canonical_json(mine):
         raise RuntimeError(f"the settings of {knot}/{model.name} differ from the sweep's key "
                            "settings; this is a bug in stiffknots, please report it")
-    return {j.replica: j for j in problem.jobs()}
+    return problem

@@ -57,6 +57,7 @@ from stiffknots.sweeps.cluster import (
 )
 from stiffknots.sweeps.convergence import ensemble_converged as converged_with_every_start
 from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube, seed_pairs
+from stiffknots.sweeps.legs import LEG_EXCLUSIONS, leg_job
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import (
     SweepJob,
@@ -185,12 +186,15 @@ def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | No
 
     shape = classify(replica.coords, True, d=job.model.thickness)
     width = job.model.width()
+    extra = {"model": job.model.name, "budget": budget, "width": width["text"],
+             "shape_reason": shape.reason}
+    if job.parent is not None:  # a continuation leg (:mod:`stiffknots.sweeps.legs`)
+        extra.update(search=job.parent["search"], leg_of=job.parent["replica"],
+                     leg_parent_epsilon=job.parent["epsilon"])
     row, coords = row_from_replica(
         replica, knot=job.knot, exclusion=job.model.exclusion, thickness=job.model.thickness,
         seed=job.seed, settings=job.settings, beads=job.model.beads, shape=shape.label,
-        multiplicity=shape.multiplicity, problem=job.settings["problem"],
-        extra={"model": job.model.name, "budget": budget, "width": width["text"],
-               "shape_reason": shape.reason})
+        multiplicity=shape.multiplicity, problem=job.settings["problem"], extra=extra)
     return store.put(row, coords), row
 
 
@@ -225,13 +229,15 @@ def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) 
     1,856, 1,582, 1,361, 1,055 followed.
 
     ``groups`` maps (knot, model) to ``{"replicas": planned so far, "settled": bool}`` and,
-    optionally, ``"crossings"`` (the knot's crossing number; without it every knot of a model
+    optionally, ``"legs"`` (continuation legs planned so far, counted with the replicas) and
+    ``"crossings"`` (the knot's crossing number; without it every knot of a model
     is alike).
     """
     added: dict[tuple[str, int], list[int]] = {}  # (model, crossings) → replicas added
     for (_, model), g in groups.items():
         if g["settled"]:
-            added.setdefault((model, g.get("crossings", 0)), []).append(g["replicas"] - base)
+            added.setdefault((model, g.get("crossings", 0)), []).append(
+                g["replicas"] + g.get("legs", 0) - base)
     if not added:
         return float(todo)
     everyone = [a for v in added.values() for a in v]
@@ -244,7 +250,8 @@ def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) 
             v = [a for (m, _), vs in added.items() if m == model for a in vs] or everyone
         return sum(v) / len(v)
 
-    more = sum(max(0.0, base + mean_like(model, g.get("crossings", 0)) - g["replicas"])
+    more = sum(max(0.0, base + mean_like(model, g.get("crossings", 0)) - g["replicas"]
+                   - g.get("legs", 0))
                for (_, model), g in groups.items() if not g["settled"])
     return todo + more
 
@@ -324,7 +331,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
     for j in jobs:
         groups.setdefault(j.group, {"knot": j.knot, "model": j.model,
                                     "replicas": budget.replicas, "open": 0,
-                                    "settled": False, "crossings": crossings(j.knot)})
+                                    "settled": False, "crossings": crossings(j.knot),
+                                    "legs": 0})
     for j in todo:
         groups[j.group]["open"] += 1
 
@@ -344,6 +352,21 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             if new:
                 g["open"] += len(new)
                 return new
+        legs = budget.legs if g["model"].exclusion in LEG_EXCLUSIONS else 0
+        while g["legs"] < legs and not ensemble_converged(
+                store, g["knot"], g["model"], res.settings_hash[g["model"].name]):
+            template = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=1),
+                                  seed)[0]
+            leg = leg_job(store, template, g["legs"])
+            if leg is None:
+                break
+            g["legs"] += 1
+            res.jobs += 1
+            res.added += 1
+            if pending([leg], store):
+                g["open"] += 1
+                return [leg]
+            res.skipped += 1
         g["settled"] = True
         return []
 
