@@ -544,3 +544,19 @@ def test_expected_todo_takes_the_mean_of_knots_like_the_open_one():
     flat = {k: {"replicas": g["replicas"], "settled": g["settled"]} for k, g in groups.items()
             if k[1] != "wide"}
     assert abs(expected_todo(flat, 10, 2) - (10 + 10 / 3 + (10 / 3 - 2) + 10 / 3)) < 1e-12
+
+
+def test_expected_todo_counts_what_a_resumed_sweep_found_stored():
+    """A (knot, model) not judged again yet (a bead ensemble waiting for its tube one) counts
+    the replicas and legs stored, not the budget's replicas it starts with."""
+    from stiffknots.sweeps.run import expected_todo
+
+    groups = {("9_1", "bead"): {"replicas": 2, "settled": True, "crossings": 9},        # +0
+              ("9_2", "bead"): {"replicas": 6, "settled": True, "crossings": 9},        # +4
+              ("9_3", "bead"): {"replicas": 2, "settled": False, "crossings": 9,
+                                "stored": 6},                                           # 0
+              ("9_4", "bead"): {"replicas": 2, "settled": False, "crossings": 9,
+                                "stored": 2, "stored_legs": 0}}                         # 2
+    assert expected_todo(groups, 0, 2) == 2.0
+    groups[("9_2", "bead")]["stored_legs"] = 2  # a settled one's stored legs count too
+    assert expected_todo(groups, 0, 2) == 3.0  # mean (0 + 6) / 2 = 3: 9_3 0, 9_4 3

@@ -57,7 +57,7 @@ from stiffknots.sweeps.cluster import (
 )
 from stiffknots.sweeps.convergence import ensemble_converged as converged_with_every_start
 from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube, seed_pairs
-from stiffknots.sweeps.legs import LEG_EXCLUSIONS, leg_job
+from stiffknots.sweeps.legs import LEG_EXCLUSIONS, LEG_REPLICA, leg_job
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import (
     SweepJob,
@@ -229,15 +229,15 @@ def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) 
     1,856, 1,582, 1,361, 1,055 followed.
 
     ``groups`` maps (knot, model) to ``{"replicas": planned so far, "settled": bool}`` and,
-    optionally, ``"legs"`` (continuation legs planned so far, counted with the replicas) and
-    ``"crossings"`` (the knot's crossing number; without it every knot of a model
-    is alike).
+    optionally, ``"legs"`` (continuation legs planned so far, counted with the replicas),
+    ``"stored"`` and ``"stored_legs"`` (those a resumed sweep found stored: counted where
+    more than planned so far) and ``"crossings"`` (the knot's crossing number; without it
+    every knot of a model is alike).
     """
     added: dict[tuple[str, int], list[int]] = {}  # (model, crossings) → replicas added
     for (_, model), g in groups.items():
         if g["settled"]:
-            added.setdefault((model, g.get("crossings", 0)), []).append(
-                g["replicas"] + g.get("legs", 0) - base)
+            added.setdefault((model, g.get("crossings", 0)), []).append(_jobs_of(g) - base)
     if not added:
         return float(todo)
     everyone = [a for v in added.values() for a in v]
@@ -250,10 +250,16 @@ def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) 
             v = [a for (m, _), vs in added.items() if m == model for a in vs] or everyone
         return sum(v) / len(v)
 
-    more = sum(max(0.0, base + mean_like(model, g.get("crossings", 0)) - g["replicas"]
-                   - g.get("legs", 0))
+    more = sum(max(0.0, base + mean_like(model, g.get("crossings", 0)) - _jobs_of(g))
                for (_, model), g in groups.items() if not g["settled"])
     return todo + more
+
+
+def _jobs_of(g: Mapping[str, Any]) -> int:
+    """The replicas and legs a (knot, model) of :func:`expected_todo` has planned or, where a
+    resumed sweep has not judged it again yet, stored."""
+    return (max(g["replicas"], g.get("stored", 0))
+            + max(g.get("legs", 0), g.get("stored_legs", 0)))
 
 
 def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, store: Store, *,
@@ -335,6 +341,19 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                                     "legs": 0})
     for j in todo:
         groups[j.group]["open"] += 1
+    # what a resumed sweep has stored already (fresh replicas, legs), for the jobs expected
+    # only: a (knot, model) not yet judged again still counts its stored replicas
+    by_model = {(m.exclusion, m.beads, res.settings_hash[m.name]): m.name for m in models}
+    stored_keys = (store.keys(settings_hash=sorted(res.settings_hash.values()),
+                              seed=[res.seed]) if jobs else set())
+    for k in stored_keys:
+        g = groups.get((k.knot, by_model.get((k.exclusion, k.beads, k.settings_hash))))
+        if g is None:
+            continue
+        if k.replica < V.MAX_REPLICAS:
+            g["stored"] = g.get("stored", 0) + 1
+        elif LEG_REPLICA <= k.replica < LEG_REPLICA + V.MAX_REPLICAS:
+            g["stored_legs"] = g.get("stored_legs", 0) + 1
 
     def extend(g: dict) -> list[SweepJob]:
         """The replicas to add to a (knot, model) whose replicas have all ended."""
