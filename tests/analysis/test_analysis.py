@@ -30,6 +30,7 @@ from stiffknots.analysis.synthetic import (
     torus_braid,
 )
 from stiffknots.chain import Chain, regular_polygon
+from stiffknots.errors import ChainWarning
 from stiffknots.theory.elastica import eight_curve, eighty_curve
 
 DATA = Path(__file__).parent.parent / "data" / "analysis"
@@ -210,6 +211,21 @@ def test_bead_kinds_mark_each_zone_on_its_beads():
             assert (k[covered_beads(z.runs, len(x))] == code).all()
         assert ((k == 0) == (st.multiplicity == 1)).all()  # every contact bead is in a zone
         assert st.BEAD_KINDS[2] == "point-braid"
+
+
+def test_a_contact_distance_too_short_for_the_bonds_is_warned_of():
+    """Read at d = 0.1 (a thin tube on unit bonds) the contacts of touching strands are
+    missed where their beads are staggered: a ChainWarning says so; at the bead rule's d it
+    does not."""
+    import warnings
+
+    x = regular_polygon(150).coords
+    with pytest.warns(ChainWarning, match="contacts are missed"):
+        analyse_structure(x, d=0.1)
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        analyse_structure(x)
+    assert not [w for w in got if "contacts are missed" in str(w.message)]
 
 
 def test_cage_structure_two_point_braids_four_arcs():

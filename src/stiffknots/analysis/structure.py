@@ -101,6 +101,29 @@ def warn_unless_model_chain(x: np.ndarray, closed: bool, d: float) -> None:
                   "the chain)", ChainWarning, stacklevel=level)
 
 
+def warn_if_cutoff_misses_contacts(x: np.ndarray, closed: bool, d: float,
+                                   cutoff: float) -> None:
+    """Warn (:class:`~stiffknots.errors.ChainWarning`) when the contact distance cannot see
+    two strands that touch: contacts are read from bead distances, and two strands a
+    distance ``d`` apart (touching) have beads up to ``√(d² + b²/4)`` apart (``b``: the
+    longest bond), so a cutoff below that misses touching strands wherever their beads are
+    staggered — a thin tube (``d ≪ b``) read at ``d`` shows fewer contacts than it has (8_1's
+    4-fold cage at w = 0.08, N = 157: "no contacts"). Read such a chain at a larger ``d``
+    (e.g. 0.5, as :mod:`stiffknots.studies.thin_limit` does) or resample it to bonds ≲ 2d."""
+    bonds = _bond_lengths(x, closed)
+    b = float(bonds.max()) if len(bonds) else 0.0
+    need = math.sqrt(d * d + b * b / 4.0)
+    if cutoff >= need:
+        return
+    level, f = 2, sys._getframe(1)
+    while f is not None and str(f.f_globals.get("__name__", "")).startswith("stiffknots."):
+        f, level = f.f_back, level + 1
+    warnings.warn(f"the contact distance {cutoff:.3g} is below {need:.3g}, the distance of "
+                  f"the beads of two strands that touch at d = {d:.3g} with bonds of "
+                  f"{b:.3g}: contacts are missed; read the chain at a larger d (e.g. 0.5) or "
+                  "resample it to bonds of at most about 2d", ChainWarning, stacklevel=level)
+
+
 # --------------------------------------------------------------------------------------------
 # small helpers
 # --------------------------------------------------------------------------------------------
@@ -754,6 +777,7 @@ def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
     x = as_coords(coords, closed)
     cmap = contact_map(x, closed, d=d, factor=factor, cutoff=cutoff, min_sep=min_sep)
     warn_unless_model_chain(x, closed, float(d))
+    warn_if_cutoff_misses_contacts(x, closed, float(d), cmap.cutoff)
     bonds = _bond_lengths(x, closed)
     total = float(bonds.sum())
     if min_length is None:
