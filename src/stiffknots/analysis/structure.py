@@ -85,20 +85,21 @@ DEFAULT_TANGENT_ANGLE = 35.0
 ANALYSIS_BOND_TOL = 1e-2
 
 
-def warn_unless_model_chain(x: np.ndarray, closed: bool, d: float) -> None:
+def warn_unless_model_chain(x: np.ndarray, closed: bool, d: float) -> bool:
     """Warn (:class:`~stiffknots.errors.ChainWarning`, at the caller's line outside the
     package) when ``x`` is not a chain of unit (equal) bonds obeying the bead rule at ``d``:
     the analysis assumes one, and on another chain its contacts, braids and shape class mean
-    little."""
+    little. True when it is one (no warning)."""
     rep = chain_report(x, closed, d=d, bond_tol=ANALYSIS_BOND_TOL, segments=False, unit=None)
     if not rep["problems"]:
-        return
+        return True
     level, f = 2, sys._getframe(1)  # stacklevel 2: the caller of this function
     while f is not None and str(f.f_globals.get("__name__", "")).startswith("stiffknots."):
         f, level = f.f_back, level + 1
     warnings.warn("the shape analysis assumes a unit-bond chain obeying the bead rule; in this "
                   "one " + "; ".join(rep["problems"]) + " (stiffknots.checks.check reports "
                   "the chain)", ChainWarning, stacklevel=level)
+    return False
 
 
 def warn_if_cutoff_misses_contacts(x: np.ndarray, closed: bool, d: float,
@@ -776,8 +777,8 @@ def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
     """
     x = as_coords(coords, closed)
     cmap = contact_map(x, closed, d=d, factor=factor, cutoff=cutoff, min_sep=min_sep)
-    warn_unless_model_chain(x, closed, float(d))
-    warn_if_cutoff_misses_contacts(x, closed, float(d), cmap.cutoff)
+    if warn_unless_model_chain(x, closed, float(d)):  # one warning for a chain that is not
+        warn_if_cutoff_misses_contacts(x, closed, float(d), cmap.cutoff)
     bonds = _bond_lengths(x, closed)
     total = float(bonds.sum())
     if min_length is None:

@@ -46,7 +46,8 @@ MIN_REPLICAS = 2
 #: Largest relative spread of their ε, (ε_max − ε_min)/ε_min.
 REL_TOL = 1e-3
 #: The rule in words (for reports).
-RULE = (f"ground state reached by ≥ {MIN_REPLICAS} replicas (same shape) with ε within "
+RULE = (f"ground state reached by ≥ {MIN_REPLICAS} independent searches (replicas; a "
+        f"continuation leg counts with the search it continued; same shape) with ε within "
         f"{REL_TOL:.1%} of the lowest, one of them the model's own search (not seeded from "
         f"a tube replica), after a replica from every default start")
 
