@@ -97,7 +97,8 @@ def test_an_unconverged_tube_ensemble_gets_a_leg_stored_once(tmp_path, monkeypat
         assert leg["start"] == parent["start"] and leg["knot_verified"] is True
         assert leg["epsilon"] <= parent["epsilon"] * (1 + 1e-9)
         assert leg["settings_hash"] == parent["settings_hash"]  # the same ensemble
-        assert res.added == 1 and res.ran == 3
+        assert res.added == 1 and res.legs == 1 and res.ran == 3
+        assert res.to_dict()["legs"] == 1
         n = st.count()
         res2 = run_sweep(["3_1"], models, budget, st, seed=3, workers=1)
         assert (res2.ran, st.count()) == (0, n) and not res2.failed

@@ -324,7 +324,8 @@ def _print(d: dict, mods) -> None:
                   f"polished under the bead rule: start 'tube-ground'); one below every bead "
                   f"search of its own: {', '.join(below) or 'none'}", highlight=False,
                   markup=False)
-    added = f", {sw['added']} added until converged" if sw["added"] else ""
+    legs = (f" ({sw['legs']} of them continuation legs)" if sw.get("legs") else "")
+    added = f", {sw['added']} added until converged{legs}" if sw["added"] else ""
     left = f", {sw['left']} not run" if sw["left"] else ""
     out.print(f"jobs: {sw['jobs']} ({sw['skipped']} stored before, {sw['ran']} run now{added}"
               f"{left}, {sw['wall_seconds']:.0f} s wall, {sw['cpu_seconds']:.0f} CPU s)",

@@ -120,7 +120,8 @@ class SweepResult:
     wall_seconds : of the whole sweep; cpu_seconds : the finished replicas' CPU time.
     workers : worker threads of the cluster; scheduler : ``"local"`` or its address.
     max_replicas : the most replicas a (knot, model) may get; added : replicas planned beyond
-    the budget's for (knot, model)s not converged (counted in ``jobs``).
+    the budget's for (knot, model)s not converged (counted in ``jobs``); legs : how many of
+    them are continuation legs (:mod:`stiffknots.sweeps.legs`).
     seeded : the bead replicas seeded from the tube ground and written now
     (:mod:`stiffknots.sweeps.cross`): ``knot``, ``model``, ``epsilon``, ``tube_epsilon``.
     """
@@ -142,6 +143,7 @@ class SweepResult:
     scheduler: str = "local"
     max_replicas: int = 0
     added: int = 0
+    legs: int = 0
     seeded: list[dict] = field(default_factory=list)
     version: str = __version__
 
@@ -169,7 +171,7 @@ class SweepResult:
                 "written": self.written, "failed": self.failed, "interrupted": self.interrupted,
                 "wall_seconds": self.wall_seconds, "cpu_seconds": self.cpu_seconds,
                 "workers": self.workers, "scheduler": self.scheduler,
-                "max_replicas": self.max_replicas, "added": self.added,
+                "max_replicas": self.max_replicas, "added": self.added, "legs": self.legs,
                 "seeded": self.seeded, "version": self.version}
 
 
@@ -382,6 +384,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             g["legs"] += 1
             res.jobs += 1
             res.added += 1
+            res.legs += 1
             if pending([leg], store):
                 g["open"] += 1
                 return [leg]
