@@ -92,6 +92,24 @@ def test_anneal_json_small(tmp_path):
     assert d["structure"] == analyse_structure(best, d=2 ** -0.5).name
 
 
+def test_anneal_coarse_to_fine(tmp_path):
+    """--coarse: a first annealing at fewer beads starts the run; the result says so (its N,
+    ε and width) and the chain is the requested N, verified; bad uses are one-line errors."""
+    rc, out, err = run("anneal", "3_1", "--beads", "60", "--coarse", "30", "--moves",
+                       "100000", "--replicas", "1", "--rounds", "1", "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    c = d["coarse"]
+    assert c["beads"] == 30 and c["replicas"] == 2 and "N = 30" in c["width"]["text"]
+    assert c["epsilon"] >= d["bounds"]["lower"] * 0.99
+    assert d["beads"] == 60 and d["knot_verified"] and "N = 60" in d["width"]["text"]
+    for args, msg in [(("--coarse", "60"), "--coarse must be fewer beads than --beads (60)"),
+                      (("--coarse", "30", "--from", "x.xyz"), "--coarse and --from both"),
+                      (("--coarse", "2"), "--coarse must be an integer in [8")]:
+        rc, out, err = run("anneal", "3_1", "--beads", "60", *args)
+        assert rc == 2 and msg in err and "Traceback" not in err, err
+
+
 def test_paper_tiny_writes_report(tmp_path):
     rc, out, err = run("paper", "--budget", "tiny", "--out", str(tmp_path), "--json")
     assert rc == 0, err

@@ -49,6 +49,10 @@ def _thin_beads(name: str, w_over_l: float) -> int:
     return V.beads_for_width(w_over_l, eps)
 
 
+#: the N from which an unconverged run suggests ``--coarse`` (bench/RESULTS.md, sixth session)
+COARSE_HINT_FROM = 300
+
+
 def anneal(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
     beads: Annotated[int | None, typer.Option(
@@ -99,6 +103,11 @@ def anneal(
         "--from", help="Start every replica from the curve in this file (any format of "
                        "`stiffknots identify`; resampled to --beads unit bonds, knot type "
                        "checked); NAME is then checked against it.")] = None,
+    coarse: Annotated[int | None, typer.Option(
+        help="Coarse to fine: first anneal at this many beads (e.g. 150; two rounds, the "
+             "same exclusion and seed), then start every replica from its lowest chain, "
+             "resampled to --beads. At large N a fresh search can miss the ground: 7_4, tube, "
+             "N = 600: 228.8 fresh, 163.9 from its N = 150 ground.", parser=count)] = None,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
@@ -143,6 +152,16 @@ def anneal(
     if m_max is not None and not 1 <= m_max <= beads - 3:
         raise UserError(f"--m-max must be an integer in [1, {beads - 3}] (N − 3 for --beads "
                         f"{beads}), got {m_max}")
+    if coarse is not None:
+        coarse = V.beads(coarse, "coarse")
+        if coarse >= beads:
+            raise UserError(f"--coarse must be fewer beads than --beads ({beads}), got "
+                            f"{coarse}")
+        if from_file is not None:
+            raise UserError("--coarse and --from both give the starting chain; give one")
+        if w_over_l is not None:
+            raise UserError("--coarse keeps the tube's diameter w in bond units (a thicker "
+                            "knot at fewer beads); give --w, not --w-over-L")
     initial = None
     if from_file is not None:
         from stiffknots.errors import ChainFormatError
@@ -164,7 +183,11 @@ def anneal(
 
     get_knot(name)  # an unknown name fails here, before any worker process has started
     # the workers start now and import the solvers while this process builds the problem
+    coarse_d = None
     with WorkerPool(default_workers(replicas)).start() as pool:
+        if coarse is not None:
+            initial, coarse_d = _coarse_stage(name, coarse, replicas, seed, exclusion, w,
+                                              delta, start, polish, json_, pool)
         problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                                schedule=sch, params=params, checkpoint_dir=checkpoint,
                                resume=resume, start=start, rounds=rounds, initial=initial,
@@ -186,6 +209,8 @@ def anneal(
     d["shape_reason"] = obs["shape_reason"]
     d["structure"] = obs.get("structure")
     d["width"] = width
+    if coarse_d is not None:
+        d["coarse"] = coarse_d
     if checkpoint is not None:
         d["checkpoint_dir"] = str(checkpoint)
     if emit(res, d, out_dir, f"{res.knot}: ε = {res.best.epsilon:.3f} ({width['text']})",
@@ -216,6 +241,12 @@ def anneal(
                   f"{r.acceptance['single']['rate']:.3f}",
                   f"{r.acceptance['multi']['rate']:.3f}", f"{r.wall_time:.1f}")
     out.print(t)
+    if coarse_d is not None:
+        out.print(f"coarse stage: N = {coarse_d['beads']}, ε = {coarse_d['epsilon']:.4f} "
+                  f"({coarse_d['shape']}, {coarse_d['width']['text']}; "
+                  f"{'converged' if coarse_d['converged'] else 'not converged'}), its lowest "
+                  f"chain resampled to N = {beads} started every replica above",
+                  markup=False, highlight=False)
     b = res.bounds
     out.print(f"shape of the best chain: {obs['label']}"
               + (f" (i = {obs['multiplicity']})" if obs["label"] == "CB" else "")
@@ -225,6 +256,10 @@ def anneal(
                   highlight=False)
     out.print(("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
+    if not res.converged and beads >= COARSE_HINT_FROM and coarse is None and initial is None:
+        out.print(f"at N = {beads} a fresh search can miss the ground (7_4, tube, N = 600: "
+                  "228.8 fresh, 163.9 from its N = 150 ground): try --coarse 150",
+                  markup=False, highlight=False)
     below = (res.thin_limit.get("excess") or 0.0) < 0
     where = ("below the thin limit of its shape: the discretisation of N beads lowers ε more "
              "than the width raises it" if below
@@ -238,3 +273,34 @@ def anneal(
         out.print(f"results in {out_dir}/ (result.json, best.xyz, best.json, best.png)",
                   markup=False, highlight=False)
     finish(res, replicas, hint)
+
+
+def _coarse_stage(name: str, beads: int, replicas: int, seed: int, exclusion: str,
+                  w: float | None, delta: float, start: str, polish: bool, quiet: bool,
+                  pool) -> tuple:
+    """``--coarse``: anneal ``name`` at ``beads`` beads (default moves and schedule for that
+    N, two rounds: every default start tried, same exclusion, diameter in bond units and
+    seed) and return its lowest chain (the start of the fine run, resampled there) and what
+    to report of it."""
+    from dataclasses import replace
+
+    from stiffknots.chain import Chain
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.problems.base import solve
+    from stiffknots.problems.closed import ClosedAnneal
+
+    params = replace(MoveParams(), exclusion=exclusion, delta=delta,
+                     **({} if w is None else {"w": w}))
+    problem = ClosedAnneal(name, beads=beads, replicas=replicas, seed=seed, params=params,
+                           start=start, rounds=2, polish=polish)
+    with ReplicaProgress(f"anneal {problem.knot_name}, coarse stage N = {beads}",
+                         replicas * 2, disable=quiet) as bars:
+        res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True,
+                    pool=pool)
+    check_interrupted(res, None)
+    obs = res.best.observables
+    info = {"beads": beads, "epsilon": res.best.epsilon, "shape": obs["shape"],
+            "converged": res.converged, "convergence": res.convergence,
+            "width": width_of(params, beads), "replicas": len(res.replicas),
+            "wall_time": res.wall_time}
+    return Chain(res.best.coords, True), info
