@@ -179,6 +179,10 @@ def test_json_entries_and_atlas_input(store, tmp_path):
 
     assert g["zones"] == analyse_structure(g["coords"], True).bead_kinds().tolist()
     assert set(g["zones"]) == {0, 2}  # the cage: free strands and two point-braids
+    from stiffknots.analysis.structure import Structure
+    from stiffknots.report.atlas import ZONE_KINDS
+
+    assert ZONE_KINDS == Structure.BEAD_KINDS  # the pages name the codes as the analysis does
     from stiffknots.report.atlas import write_atlas
 
     study = family_study({x["name"]: x["models"]["bead"]["ground"]

@@ -93,13 +93,19 @@ def warn_unless_model_chain(x: np.ndarray, closed: bool, d: float) -> bool:
     rep = chain_report(x, closed, d=d, bond_tol=ANALYSIS_BOND_TOL, segments=False, unit=None)
     if not rep["problems"]:
         return True
+    _warn_at_user_line("the shape analysis assumes a unit-bond chain obeying the bead rule; "
+                       "in this one " + "; ".join(rep["problems"])
+                       + " (stiffknots.checks.check reports the chain)")
+    return False
+
+
+def _warn_at_user_line(message: str) -> None:
+    """A :class:`~stiffknots.errors.ChainWarning` at the first line outside the package on
+    the stack (the user's call, however deep the analysis called us)."""
     level, f = 2, sys._getframe(1)  # stacklevel 2: the caller of this function
     while f is not None and str(f.f_globals.get("__name__", "")).startswith("stiffknots."):
         f, level = f.f_back, level + 1
-    warnings.warn("the shape analysis assumes a unit-bond chain obeying the bead rule; in this "
-                  "one " + "; ".join(rep["problems"]) + " (stiffknots.checks.check reports "
-                  "the chain)", ChainWarning, stacklevel=level)
-    return False
+    warnings.warn(message, ChainWarning, stacklevel=level)
 
 
 def warn_if_cutoff_misses_contacts(x: np.ndarray, closed: bool, d: float,
@@ -116,13 +122,10 @@ def warn_if_cutoff_misses_contacts(x: np.ndarray, closed: bool, d: float,
     need = math.sqrt(d * d + b * b / 4.0)
     if cutoff >= need:
         return
-    level, f = 2, sys._getframe(1)
-    while f is not None and str(f.f_globals.get("__name__", "")).startswith("stiffknots."):
-        f, level = f.f_back, level + 1
-    warnings.warn(f"the contact distance {cutoff:.3g} is below {need:.3g}, the distance of "
-                  f"the beads of two strands that touch at d = {d:.3g} with bonds of "
-                  f"{b:.3g}: contacts are missed; read the chain at a larger d (e.g. 0.5) or "
-                  "resample it to bonds of at most about 2d", ChainWarning, stacklevel=level)
+    _warn_at_user_line(f"the contact distance {cutoff:.3g} is below {need:.3g}, the distance "
+                       f"of the beads of two strands that touch at d = {d:.3g} with bonds of "
+                       f"{b:.3g}: contacts are missed; read the chain at a larger d (e.g. "
+                       "0.5) or resample it to bonds of at most about 2d")
 
 
 # --------------------------------------------------------------------------------------------

@@ -186,8 +186,8 @@ def anneal(
     coarse_d = None
     with WorkerPool(default_workers(replicas)).start() as pool:
         if coarse is not None:
-            initial, coarse_d = _coarse_stage(name, coarse, replicas, seed, exclusion, w,
-                                              delta, start, polish, json_, pool)
+            initial, coarse_d = _coarse_stage(name, coarse, replicas, seed, params, start,
+                                              polish, json_, pool)
         problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                                schedule=sch, params=params, checkpoint_dir=checkpoint,
                                resume=resume, start=start, rounds=rounds, initial=initial,
@@ -275,22 +275,19 @@ def anneal(
     finish(res, replicas, hint)
 
 
-def _coarse_stage(name: str, beads: int, replicas: int, seed: int, exclusion: str,
-                  w: float | None, delta: float, start: str, polish: bool, quiet: bool,
-                  pool) -> tuple:
+def _coarse_stage(name: str, beads: int, replicas: int, seed: int, params, start: str,
+                  polish: bool, quiet: bool, pool) -> tuple:
     """``--coarse``: anneal ``name`` at ``beads`` beads (default moves and schedule for that
-    N, two rounds: every default start tried, same exclusion, diameter in bond units and
-    seed) and return its lowest chain (the start of the fine run, resampled there) and what
-    to report of it."""
+    N, two rounds: every default start tried; the fine run's move parameters — exclusion,
+    diameter in bond units, δ — with the default m_max of that N; the same seed) and return
+    its lowest chain (the start of the fine run, resampled there) and what to report of it."""
     from dataclasses import replace
 
     from stiffknots.chain import Chain
-    from stiffknots.engine.params import MoveParams
     from stiffknots.problems.base import solve
     from stiffknots.problems.closed import ClosedAnneal
 
-    params = replace(MoveParams(), exclusion=exclusion, delta=delta,
-                     **({} if w is None else {"w": w}))
+    params = replace(params, m_max=None)
     problem = ClosedAnneal(name, beads=beads, replicas=replicas, seed=seed, params=params,
                            start=start, rounds=2, polish=polish)
     with ReplicaProgress(f"anneal {problem.knot_name}, coarse stage N = {beads}",

@@ -337,10 +337,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         return get_knot(knot).crossing_number
 
     for j in jobs:
-        groups.setdefault(j.group, {"knot": j.knot, "model": j.model,
-                                    "replicas": budget.replicas, "open": 0,
-                                    "settled": False, "crossings": crossings(j.knot),
-                                    "legs": 0})
+        if j.group not in groups:  # (the catalogue looked up once a knot and model)
+            groups[j.group] = {"knot": j.knot, "model": j.model, "replicas": budget.replicas,
+                               "open": 0, "settled": False, "crossings": crossings(j.knot),
+                               "legs": 0}
     for j in todo:
         groups[j.group]["open"] += 1
     # what a resumed sweep has stored already (fresh replicas, legs), for the jobs expected
