@@ -9,12 +9,16 @@ Prints one line per knot and a summary; writes bench/defaults_survey.json (or ``
 after every knot, with every replica's search (lineage, leg), start, ε and shape, and skips the
 knots already in it (delete it to start over).
 
-    python bench/defaults_survey.py [--out FILE] [KNOT ...]
+    python bench/defaults_survey.py [--out FILE] [--with "ANNEAL OPTIONS"] [KNOT ...]
+
+``--with`` adds options to every command (e.g. ``--with "--exclusion tube"``: the tube model
+with the same defaults otherwise); they are recorded in each row as ``options``.
 """
 
 from __future__ import annotations
 
 import json
+import shlex
 import subprocess
 import sys
 import time
@@ -35,6 +39,9 @@ def main(argv: list[str]) -> None:
     path = Path(__file__).with_name("defaults_survey.json")
     if argv[:1] == ["--out"]:
         path, argv = Path(argv[1]), argv[2:]
+    options: list[str] = []
+    if argv[:1] == ["--with"]:
+        options, argv = shlex.split(argv[1]), argv[2:]
     knots = argv or [k.name for k in catalogue() if 3 <= k.crossing_number <= 8]
     # resumable: the knots already in the file are kept and not run again
     rows = json.loads(path.read_text()) if path.exists() else []
@@ -43,8 +50,8 @@ def main(argv: list[str]) -> None:
         if name in done:
             continue
         t0 = time.perf_counter()
-        p = subprocess.run([sys.executable, "-m", "stiffknots.cli", "anneal", name, "--json"],
-                           capture_output=True, text=True)
+        p = subprocess.run([sys.executable, "-m", "stiffknots.cli", "anneal", name, "--json",
+                            *options], capture_output=True, text=True)
         wall = time.perf_counter() - t0
         if p.returncode != 0:
             rows.append({"knot": name, "rc": p.returncode, "error": p.stderr.strip()[-300:],
@@ -52,7 +59,7 @@ def main(argv: list[str]) -> None:
             print(f"{name:6s} rc={p.returncode} {p.stderr.strip()[-200:]}", flush=True)
             continue
         d = json.loads(p.stdout)
-        row = {"knot": name, "rc": 0, "epsilon": d["epsilon"],
+        row = {"knot": name, "rc": 0, "options": options, "epsilon": d["epsilon"],
                "shape": d.get("shape"), "converged": d.get("converged"),
                "reason": d.get("convergence"), "rounds": d.get("rounds"),
                "replicas": len(d.get("replicas", [])), "wall_s": round(wall, 1),
