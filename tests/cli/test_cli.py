@@ -203,3 +203,21 @@ def test_help_texts_are_reflowed_paragraphs():
     # thin-limit's docstring was wrapped at 96 columns: each of its lines ended mid-sentence
     assert "each point annealed or continued" in " ".join(out.split())
     assert "previous width and polished, corrected" in " ".join(out.split())
+
+
+def test_anneal_unconverged_bead_rule_points_to_the_tube_model():
+    """An adaptive bead-rule run that ends without a verdict says why bead-rule searches rarely
+    meet and names the tube model; a tube run, or a fixed budget (--rounds 1), does not."""
+    from stiffknots.cli.anneal import BEAD_HINT
+
+    first = BEAD_HINT.split(":")[0]
+    base = ("anneal", "6_3", "--moves", "20000", "--replicas", "1")
+    rc, out, err = run(*base, "--rounds", "2", "--no-polish")
+    assert rc == 0, err
+    flat = " ".join(out.split())
+    assert "NOT converged" in flat and " ".join(first.split()) in flat
+    assert "--exclusion tube" in flat
+    for extra in (("--rounds", "1"), ("--rounds", "2", "--exclusion", "tube")):
+        rc, out, err = run(*base, *extra, "--no-polish")
+        assert rc == 0, err
+        assert " ".join(first.split()) not in " ".join(out.split())

@@ -52,6 +52,16 @@ def _thin_beads(name: str, w_over_l: float) -> int:
 #: the N from which an unconverged run suggests ``--coarse`` (bench/RESULTS.md, sixth session)
 COARSE_HINT_FROM = 300
 
+#: what an adaptive bead-rule run that ended without a verdict says next (the defaults survey
+#: of both models, bench/RESULTS.md, seventh session)
+BEAD_HINT = ("the bead rule's minima lie within tenths of a percent of each other (strands "
+             "sink between each other's beads where they cross), so its independent searches "
+             "rarely meet: with these defaults 23 of the 35 prime knots through 8 crossings "
+             "converge. The tube model (--exclusion tube: a smooth tube of the same diameter; "
+             "its ε lies above the bead rule's) converges for 33 of 35, but another seed found "
+             "a lower state for 5 of 65 such verdicts (8_13: 216.4 against 278.5): a verdict "
+             "is a statistical statement; another --seed checks it")
+
 
 def anneal(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
@@ -260,6 +270,8 @@ def anneal(
         out.print(f"at N = {beads} a fresh search can miss the ground (7_4, tube, N = 600: "
                   "228.8 fresh, 163.9 from its N = 150 ground): try --coarse 150",
                   markup=False, highlight=False)
+    if not res.converged and params.exclusion == "bead" and rounds > 1:
+        out.print(BEAD_HINT, markup=False, highlight=False)
     below = (res.thin_limit.get("excess") or 0.0) < 0
     where = ("below the thin limit of its shape: the discretisation of N beads lowers ε more "
              "than the width raises it" if below
