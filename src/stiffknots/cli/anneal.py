@@ -56,11 +56,11 @@ COARSE_HINT_FROM = 300
 #: of both models, bench/RESULTS.md, seventh session)
 BEAD_HINT = ("the bead rule's minima lie within tenths of a percent of each other (strands "
              "sink between each other's beads where they cross), so its independent searches "
-             "rarely meet: with these defaults 23 of the 35 prime knots through 8 crossings "
-             "converge. The tube model (--exclusion tube: a smooth tube of the same diameter; "
-             "its ε lies above the bead rule's) converges for 33 of 35, but another seed found "
-             "a lower state for 5 of 65 such verdicts (8_13: 216.4 against 278.5): a verdict "
-             "is a statistical statement; another --seed checks it")
+             "rarely meet: with the defaults (N = 150) 23 of the 35 prime knots through 8 "
+             "crossings converge. The tube model (--exclusion tube: a smooth tube of the same "
+             "diameter; its ε lies above the bead rule's) converges for 33 of 35, but another "
+             "seed found a lower state for 5 of 65 such verdicts (8_13: 216.4 against 278.5): a "
+             "verdict is a statistical statement; another --seed checks it")
 
 
 def anneal(
