@@ -54,7 +54,8 @@ def main(argv: list[str]) -> None:
                             *options], capture_output=True, text=True)
         wall = time.perf_counter() - t0
         if p.returncode != 0:
-            rows.append({"knot": name, "rc": p.returncode, "error": p.stderr.strip()[-300:],
+            rows.append({"knot": name, "rc": p.returncode, "options": options,
+                         "error": p.stderr.strip()[-300:],
                          "wall_s": wall})
             print(f"{name:6s} rc={p.returncode} {p.stderr.strip()[-200:]}", flush=True)
             continue
