@@ -14,8 +14,12 @@ its wall time to the same ε. The two never run at the same time (each gets one 
 table printed at the end gives the ratio LAMMPS s / stiffknots s-to-the-same-ε (wall clock,
 and CPU seconds in brackets: on a shared machine the wall clock includes time taken by other
 jobs) and medians; a second table does the same for LAMMPS stopped after its first 10⁵ CG
-iterations (almost all of the minimisation's gain). Raw numbers, with both final chains,
-their shape class and closest bead and bond distances: bench/peer_lammps.json.
+iterations (almost all of the minimisation's gain). Two more tables time stiffknots' recipes
+that end with the final minimiser, each a ladder of budgets tried in turn from the same start
+(time summed over the rungs run): the Monte Carlo annealing (``run_polished``) and the
+Langevin schedule (``run_langevin_recipe``: the same dynamics as LAMMPS here, in stiffknots'
+compiled, passage-guarded kernel). Raw numbers, with both final chains, their shape class and
+closest bead and bond distances: bench/peer_lammps.json.
 
 The LAMMPS model (units lj, bond length 1, C = 1, k_B = 1, matching stiffknots):
 
@@ -313,6 +317,39 @@ def run_polished(coords: np.ndarray, target: float, seed: int,
             "coords": rungs[-1]["coords"]}
 
 
+#: The collective recipe: guarded Langevin dynamics (the peer's own protocol, in stiffknots'
+#: compiled kernel) + the final minimiser, with these step budgets tried in turn (one core).
+LANGEVIN_LADDER = (300_000, 1_000_000, 3_000_000)
+
+
+def run_langevin_recipe(coords: np.ndarray, target: float, seed: int,
+                        ladder: tuple[int, ...] = LANGEVIN_LADDER) -> dict:
+    """stiffknots' Langevin schedule (:func:`stiffknots.engine.langevin.run_langevin`: the
+    same model, schedule and steps as LAMMPS here, with the passage guard) then the final
+    minimiser (bead rule), timed to ``target`` like :func:`run_polished`: the rungs run in turn
+    until one ends at ε ≤ target, the time is the sum over the rungs run."""
+    from stiffknots.engine.langevin import LangevinSettings, run_langevin
+    from stiffknots.engine.polish import polish
+    from stiffknots.engine.prims import energy_chain
+
+    rungs, wall, cpu, reached = [], 0.0, 0.0, None
+    for steps in ladder:
+        t0, c0 = time.perf_counter(), time.process_time()
+        r = run_langevin(coords, LangevinSettings(steps=steps), seed)
+        p = polish(r.pos)
+        dt, dc = time.perf_counter() - t0, time.process_time() - c0
+        wall, cpu = wall + dt, cpu + dc
+        eps = float(energy_chain(p.pos, False)) * len(p.pos)
+        rungs.append({"steps": steps, "epsilon_dynamics": float(r.epsilon), "epsilon": eps,
+                      "wall_seconds": dt, "cpu_seconds": dc, "refused_steps": r.refused_steps,
+                      "relative_kkt": float(p.relative_kkt), "coords": p.pos})
+        if eps <= target:
+            reached = {"wall_seconds": wall, "cpu_seconds": cpu, "steps": steps}
+            break
+    return {"rungs": rungs, "reached": reached, "epsilon": rungs[-1]["epsilon"],
+            "coords": rungs[-1]["coords"]}
+
+
 def seconds_to(trace: dict, eps: float) -> float | None:
     """First wall second of a stiffknots trace (one point per chunk) with ε ≤ ``eps``."""
     for t, e in zip(trace["seconds"], trace["epsilon"], strict=True):
@@ -324,8 +361,11 @@ def seconds_to(trace: dict, eps: float) -> float | None:
 def _warm_stiffknots(coords: np.ndarray) -> None:
     """Compile (or load from cache) the numba kernels outside the timed runs."""
     from stiffknots.engine.driver import AnnealSettings, run_replica
+    from stiffknots.engine.langevin import LangevinSettings, run_langevin
+    from stiffknots.engine.polish import polish
 
     run_replica(coords, AnnealSettings(moves=20_000, n_chunks=2), 0)
+    polish(run_langevin(coords, LangevinSettings(steps=2_000), 0).pos, max_iter=3)
 
 
 # --------------------------------------------------------------------------- strand passage
@@ -432,6 +472,26 @@ def compare(knots: list[str], seeds: list[int], beads: int = 150, steps: int = 1
                        f"{got['moves']:,} moves), ratio {row['ratio_polished']:.1f}× "
                        f"(CPU {row['ratio_polished_cpu']:.1f}×)" if got else "not reached")
                     + f"; final ε {pol['epsilon']:.4f} ({pol['shape']}, knot {p_found})")
+                lg = run_langevin_recipe(x, lm["epsilon"], seed)
+                xl = lg.pop("coords")
+                for rung in lg["rungs"]:
+                    rung.pop("coords")
+                l_ok, l_found = verify_knot(xl, name)
+                lg.update(knot_ok=bool(l_ok), knot_found=l_found, shape=_shape(xl),
+                          min_nonbonded_distance=min_nonbonded_distance(xl),
+                          coords=_plain(xl))
+                row["langevin"] = lg
+                got = lg["reached"]
+                row["ratio_langevin"] = (lm["wall_seconds"] / got["wall_seconds"]
+                                         if got and l_ok else None)
+                row["ratio_langevin_cpu"] = (lm["cpu_seconds"] / got["cpu_seconds"]
+                                             if got and l_ok else None)
+                log(f"{name} seed {seed}: stiffknots Langevin + polish to ε ≤ "
+                    f"{lm['epsilon']:.3f}: "
+                    + (f"{got['wall_seconds']:.2f} s (CPU {got['cpu_seconds']:.2f} s, "
+                       f"{got['steps']:,} steps), ratio {row['ratio_langevin']:.1f}× "
+                       f"(CPU {row['ratio_langevin_cpu']:.1f}×)" if got else "not reached")
+                    + f"; final ε {lg['epsilon']:.4f} ({lg['shape']}, knot {l_found})")
                 log(f"{name} seed {seed}: stiffknots to ε ≤ {lm['epsilon']:.3f}: "
                     f"{_fmt(t, '{:.2f}')} s (CPU {_fmt(tc, '{:.2f}')} s), final ε "
                     f"{sk['epsilon']:.3f} (whole run {sk['wall_time']:.1f} s, knot {sk_found}, "
@@ -533,6 +593,29 @@ def table(result: dict) -> str:
             lines.append(f"| {name} | median | | | | | "
                          f"| {_x(float(med([r['ratio_polished'] or 0.0 for r in rs])))} "
                          f"({_x(float(med([r['ratio_polished_cpu'] or 0.0 for r in rs])))}) |")
+    lgv = [r for r in result["rows"] if r.get("langevin")]
+    if lgv:
+        lines += ["", "stiffknots' Langevin schedule — guarded Langevin dynamics (LAMMPS's "
+                  "model and schedule, dt 0.005, damp 100) then the final minimiser, budgets "
+                  f"{', '.join(f'{m / 1e6:g} M' for m in LANGEVIN_LADDER)} steps tried in "
+                  "turn, time summed over the rungs run — to LAMMPS's ε (one core each):", "",
+                  "| knot | seed | LAMMPS ε | LAMMPS s (CPU) | stiffknots ε (shape) "
+                  "| stiffknots s (CPU) | steps | ratio (CPU) |", "|" + "---|" * 8]
+        for r in lgv:
+            lm, p = r["lammps"], r["langevin"]
+            got = p["reached"] or {}
+            mid = (f"| {_t(got.get('wall_seconds'))} ({_t(got.get('cpu_seconds'))}) "
+                   f"| {got['steps']:,} " if got else "| never | — ")
+            lines.append(
+                f"| {r['knot']} | {r['seed']} | {lm['epsilon']:.4f} "
+                f"| {lm['wall_seconds']:.1f} ({lm['cpu_seconds']:.1f}) "
+                f"| {p['epsilon']:.4f} ({p['shape']}) " + mid
+                + f"| {_x(r['ratio_langevin'])} ({_x(r['ratio_langevin_cpu'])}) |")
+        for name in dict.fromkeys(r["knot"] for r in lgv):
+            rs = [r for r in lgv if r["knot"] == name]
+            lines.append(f"| {name} | median | | | | | "
+                         f"| {_x(float(med([r['ratio_langevin'] or 0.0 for r in rs])))} "
+                         f"({_x(float(med([r['ratio_langevin_cpu'] or 0.0 for r in rs])))}) |")
     load = result.get("load_average")
     if load:
         lines += ["", f"load average (1, 5, 15 min) before {load['before']}, "

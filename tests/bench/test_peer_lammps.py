@@ -69,3 +69,15 @@ def test_short_lammps_run_keeps_knot_and_bonds(peer):
     assert r["min_nonbonded_distance"] > 0.7
     assert np.isfinite(r["epsilon"]) and r["epsilon"] > 8 * np.pi**2
     assert r["coords"].shape == (150, 3)
+
+
+def test_langevin_recipe_stops_at_the_first_rung_that_reaches_the_target(peer):
+    x = peer.starting_chain("3_1", 80)
+    easy = peer.run_langevin_recipe(x, 1e9, seed=1, ladder=(3_000, 6_000))
+    assert len(easy["rungs"]) == 1 and easy["reached"]["steps"] == 3_000
+    hard = peer.run_langevin_recipe(x, 1.0, seed=1, ladder=(3_000, 6_000))
+    assert len(hard["rungs"]) == 2 and hard["reached"] is None
+    assert hard["rungs"][1]["wall_seconds"] > 0
+    from stiffknots.knots.identify import verify_knot
+
+    assert verify_knot(hard["coords"], "3_1")[0]

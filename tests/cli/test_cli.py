@@ -221,3 +221,23 @@ def test_anneal_unconverged_bead_rule_points_to_the_tube_model():
         rc, out, err = run(*base, *extra, "--no-polish")
         assert rc == 0, err
         assert " ".join(first.split()) not in " ".join(out.split())
+
+
+def test_anneal_with_the_langevin_schedule():
+    """`anneal --schedule langevin`: replicas of guarded Langevin dynamics, polished and
+    verified, the table's unit in dynamics steps and no Monte Carlo acceptance."""
+    rc, out, err = run("anneal", "3_1", "--schedule", "langevin", "--moves", "4000",
+                       "--rounds", "1", "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    assert d["settings"]["schedule"]["kind"] == "langevin"
+    assert d["settings"]["schedule"]["t_end"] == pytest.approx(1e-4)
+    assert d["settings"]["moves"] == 4000
+    for r in d["replicas"]:
+        assert r["knot_verified"] and r["langevin"]["refused_steps"] >= 0
+        assert r["polish"]["relative_kkt"] < 1e-6
+    rc, out, err = run("anneal", "3_1", "--schedule", "langevin", "--moves", "4000",
+                       "--rounds", "1")
+    assert rc == 0, err
+    flat = " ".join(out.split())
+    assert "4,000 dynamics steps/replica" in flat and "–" in flat

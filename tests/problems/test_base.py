@@ -308,3 +308,29 @@ def test_a_tube_route_replica_ends_bead_admissible_polished_and_verified():
     # the tube would allow (0.488 here; the same job polished under the tube rule ends at
     # exactly w = d, 0.70711, and ε 129.312 against 128.459)
     assert r.min_segment_distance < d - 0.1
+
+
+@pytest.mark.parametrize("kind", ["langevin", "tempering"])
+def test_schedules_without_hops_run_later_rounds_as_new_searches(kind):
+    # a schedule that cannot continue a search (no basin hops) fills the rounds after the
+    # fresh ones with new searches (it once failed there on zip(legs, parents)); 7_4 on a
+    # budget this small never converges
+    from stiffknots.engine.schedules import Schedule
+
+    sch = Schedule(kind=kind, t_end=1e-4, relax_fraction=0.0)
+    res = anneal("7_4", moves=2_000 if kind == "langevin" else 20_000, replicas=2, seed=0,
+                 rounds=3, schedule=sch)
+    assert res.rounds == 3 and len(res.replicas) == 6
+    assert all(r.leg == 0 and r.lineage == r.replica for r in res.replicas)
+    assert all(r.knot == "7_4" and r.knot_verified and r.polish for r in res.replicas)
+    if kind == "langevin":
+        assert all(r.langevin["refused_steps"] >= 0 for r in res.replicas)
+
+
+def test_the_langevin_schedule_is_refused_for_the_tube_model():
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.engine.schedules import Schedule
+    from stiffknots.errors import InvalidParameter
+
+    with pytest.raises(InvalidParameter, match="bead rule"):
+        anneal("3_1", schedule=Schedule(kind="langevin"), params=MoveParams(exclusion="tube"))

@@ -71,7 +71,8 @@ def anneal(
              "(discretisation error below 0.1 %).", parser=count, show_default=False)] = None,
     moves: Annotated[int | None, typer.Option(
         help="Attempted moves per replica (default: 15,000,000 at N = 150, scaled as N; "
-             "1.5e7 works too).", parser=count)] = None,
+             "1.5e7 works too); with --schedule langevin, dynamics steps (default "
+             "1,000,000).", parser=count)] = None,
     replicas: ReplicasOpt = 2,
     rounds: Annotated[int, typer.Option(
         help="Most rounds of --replicas replicas: after each round the run stops if the "
@@ -87,12 +88,13 @@ def anneal(
                            "without --beads, N = ⌈(ε/(6·0.001))^½⌉ with ε the knot's upper "
                            "bound (discretisation error ≈ ε/(6N²) below 0.1 %).")] = None,
     schedule: Annotated[str, typer.Option(
-        help="geometric (default), power (the paper's power law; use it with --t-start 3e-2) "
-             "or tempering (replica exchange).")] = "geometric",
+        help="geometric (default), power (the paper's power law; use it with --t-start 3e-2), "
+             "tempering (replica exchange) or langevin (guarded Langevin dynamics of the "
+             "whole chain, the peer LAMMPS's search; bead rule).")] = "geometric",
     t_start: Annotated[float | None, typer.Option(
         help="Initial temperature (units of C) (default: 0.1).")] = None,
     t_end: Annotated[float | None, typer.Option(
-        help="Final temperature before the quench (default: 1e-6).")] = None,
+        help="Final temperature before the quench (default: 1e-6; langevin 1e-4).")] = None,
     relax_fraction: Annotated[float | None, typer.Option(
         help="Fraction of the moves first relaxing the embedding at low T (default: 0.4; "
              "0 = plain annealing).")] = None,
@@ -151,9 +153,24 @@ def anneal(
     choice("--exclusion", exclusion, ("bead", "tube"))
     choice("--schedule", schedule, SCHEDULES)
     tube_only(w, exclusion)
-    if schedule == "tempering" and relax_fraction is not None:
+    if schedule in ("tempering", "langevin") and relax_fraction is not None:
         raise UserError("--relax-fraction applies to the power and geometric schedules "
-                        "(tempering has no relaxation stage)")
+                        f"({schedule} has no relaxation stage)")
+    if schedule == "langevin":
+        if exclusion != "bead" or tube_route:
+            raise UserError("--schedule langevin runs the bead rule (its dynamics holds beads "
+                            "apart, not tubes): drop --exclusion tube, --w, --w-over-L and "
+                            "--tube-route")
+        if checkpoint is not None:
+            raise UserError("--checkpoint applies to the Monte Carlo schedules (a langevin "
+                            "replica takes seconds)")
+        if t_end is None:
+            from stiffknots.engine.langevin import DEFAULT_T_END
+
+            t_end = DEFAULT_T_END * (150 / beads) ** 2
+            if t_start is not None and t_end >= t_start:
+                raise UserError(f"--t-start must lie above the langevin schedule's final "
+                                f"temperature {t_end:g} (or give --t-end), got {t_start:g}")
     given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
     sch = replace(Schedule().for_beads(beads), kind=schedule,
                   **{k: v for k, v in given.items() if v is not None})
@@ -227,8 +244,9 @@ def anneal(
     if emit(res, d, out_dir, f"{res.knot}: ε = {res.best.epsilon:.3f} ({width['text']})",
             "anneal", json_, replicas, hint):
         return
+    unit = "dynamics steps" if schedule == "langevin" else "moves"
     t = Table(title=escape(f"{res.knot}, {width['text']}, {res.settings['moves']:,} "
-                           "moves/replica"))
+                           f"{unit}/replica"))
     # the seeds (64-bit) are in --json and result.json: the table keeps to 80 columns, and ε
     # and the replica are never cut
     for col in ("replica", "start", "ε", "shape", "knot", "min seg dist", "acc single",
@@ -249,8 +267,10 @@ def anneal(
                   r.observables["shape"],
                   escape(str(r.knot)) + (" ✓" if r.knot_verified else " ✗"),
                   segment_distance_text(r.min_segment_distance),
-                  f"{r.acceptance['single']['rate']:.3f}",
-                  f"{r.acceptance['multi']['rate']:.3f}", f"{r.wall_time:.1f}")
+                  *((f"{r.acceptance['single']['rate']:.3f}",
+                     f"{r.acceptance['multi']['rate']:.3f}") if r.langevin is None
+                    else ("–", "–")),  # no Monte Carlo moves
+                  f"{r.wall_time:.1f}")
     out.print(t)
     if coarse_d is not None:
         out.print(f"coarse stage: N = {coarse_d['beads']}, ε = {coarse_d['epsilon']:.4f} "

@@ -191,6 +191,8 @@ class ReplicaResult:
     ``theta_max`` (``tight`` plan). ``seconds_to_target``/``cpu_seconds_to_target``:
     wall-clock and CPU seconds until ε first fell to ``target_epsilon`` (None: never).
     ``tempering``: ladder and swap statistics of a replica-exchange run (None otherwise).
+    ``langevin``: what the dynamics of a ``langevin`` replica did (ε before the projection
+    onto unit bonds, refused steps, guard checks; :mod:`stiffknots.engine.langevin`).
     Open chains: ``excess_length``, ``extension`` (Δz), ``force`` and ``total_energy``
     (E_d − F·Δz). ``max_turn``: the largest turning angle of the chain (radians).
     """
@@ -214,6 +216,7 @@ class ReplicaResult:
     stage_epsilon: dict = field(default_factory=dict)
     best_stage: str | None = None
     tempering: dict | None = None
+    langevin: dict | None = None
     resumed_from_step: int | None = None
     excess_length: float | None = None
     extension: float | None = None
@@ -278,6 +281,8 @@ def plan_steps(settings: AnnealSettings) -> list[Step]:
     stages = sch.stages
     if stages == ("tempering",):
         raise ValueError("a tempering schedule has no annealing plan (see engine.tempering)")
+    if stages == ("langevin",):
+        raise ValueError("a langevin schedule has no annealing plan (see engine.langevin)")
     fr = sch.stage_fractions()
     moves = {s: int(total * fr[s]) for s in stages}
     moves["anneal"] = total - sum(v for s, v in moves.items() if s != "anneal")
@@ -673,6 +678,8 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
     settings.validate()
     if settings.schedule.kind == "tempering":
         raise ValueError("a tempering schedule runs with engine.tempering.run_tempering")
+    if settings.schedule.kind == "langevin":
+        raise ValueError("a langevin schedule runs with engine.langevin.run_langevin_replica")
     steps = plan_steps(settings)
     keys = trace_keys(settings)
     total = sum(s.moves for s in steps)

@@ -34,6 +34,14 @@ With ``relax_fraction`` r > 0 a run has two stages, each ending with its own que
 The driver keeps the lowest-energy quenched chain of all stages. r = 0 and K = 0 is the plain
 annealing of the paper.
 
+Langevin dynamics
+-----------------
+``kind = "langevin"`` replaces the Monte Carlo by guarded Langevin dynamics of the whole chain
+(:mod:`stiffknots.engine.langevin`: every bead moves at every step, the way the peer LAMMPS
+searches), T falling exponentially from ``t_start`` to ``t_end``; ``moves`` then counts
+dynamics steps. Closed chains under the bead rule only; ``relax_fraction`` and the hops are
+not used.
+
 Parallel tempering
 ------------------
 ``kind = "tempering"`` replaces annealing by replica exchange
@@ -52,7 +60,7 @@ import numpy as np
 
 from stiffknots.errors import InvalidParameter
 
-SCHEDULES = ("power", "geometric", "tempering")
+SCHEDULES = ("power", "geometric", "tempering", "langevin")
 
 
 @dataclass(frozen=True)
@@ -122,7 +130,7 @@ class Schedule:
             raise InvalidParameter("t_end", self.t_end, f"below t_start = {self.t_start:g}")
         if not 0 <= self.relax_fraction < 1:
             raise InvalidParameter("relax_fraction", self.relax_fraction, "in [0, 1)")
-        if self.relax_fraction > 0 and self.kind != "tempering" and not (
+        if self.relax_fraction > 0 and self.kind in ("power", "geometric") and not (
                 self.t_relax > self.t_relax_end):
             raise InvalidParameter("t_relax_end", self.t_relax_end,
                                    f"below t_relax = {self.t_relax:g}")
@@ -132,7 +140,9 @@ class Schedule:
             raise InvalidParameter("hop_fraction", self.hop_fraction,
                                    f"in (0, {1 - self.relax_fraction:g}) (1 − relax_fraction: "
                                    "the annealing stage keeps the rest) when hops > 0")
-        if self.hops > 0 and self.kind != "tempering" and not self.t_hop > self.t_end:
+        if self.hops > 0 and self.kind == "langevin":
+            raise InvalidParameter("hops", self.hops, "0 with the langevin schedule")
+        if self.hops > 0 and self.kind in ("power", "geometric") and not self.t_hop > self.t_end:
             raise InvalidParameter("t_hop", self.t_hop, f"above t_end = {self.t_end:g}")
         if self.kind == "tempering" and not 2 <= self.n_temps <= 64:
             raise InvalidParameter("n_temps", self.n_temps, "an integer in [2, 64]")
@@ -141,8 +151,8 @@ class Schedule:
     def stages(self) -> tuple[str, ...]:
         """The stages of an annealing run, in order: ``relax`` (if any), ``anneal``, then the
         hops ``hop1`` … ``hopK`` (if any)."""
-        if self.kind == "tempering":
-            return ("tempering",)
+        if self.kind in ("tempering", "langevin"):
+            return (self.kind,)
         first = ("relax", "anneal") if self.relax_fraction > 0 else ("anneal",)
         return first + tuple(f"hop{k}" for k in range(1, self.hops + 1))
 

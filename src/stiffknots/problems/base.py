@@ -52,6 +52,7 @@ from stiffknots.engine.driver import (
     replica_seeds,
     run_replica,
 )
+from stiffknots.engine.langevin import run_langevin_replica
 from stiffknots.engine.tempering import run_tempering
 from stiffknots.errors import TopologyChangedError
 from stiffknots.fileio import write_bytes, write_json
@@ -218,6 +219,9 @@ def run_job(job: Job) -> Replica:
           "checkpoint_seconds": job.checkpoint_seconds if job.checkpoint else None}
     if job.settings.schedule.kind == "tempering":
         raw = run_tempering(job.coords, job.settings, job.seed, job.replica, **kw)
+    elif job.settings.schedule.kind == "langevin":
+        raw = run_langevin_replica(job.coords, job.settings, job.seed, job.replica,
+                                   progress=report, **kw)
     else:
         raw = run_replica(job.coords, job.settings, job.seed, job.replica, progress=report, **kw)
     wall0, cpu0 = time.perf_counter(), time.process_time()  # after the Monte Carlo
@@ -689,7 +693,9 @@ def _rounds(problem: Problem, nw: int, done: Callable[[Replica], None],
         if later:
             parents = [r for r in bests
                        if not stalled(problem, results, r)][:problem.legs_per_round]
-            legs = problem.continue_jobs(parents, first=rnd * problem.replicas) or []
+            legs = problem.continue_jobs(parents, first=rnd * problem.replicas)
+            if legs is None:  # the problem's schedule cannot continue a search (no hops)
+                legs, parents = [], []
             for j, par in zip(legs, parents, strict=True):
                 j.lineage = lineage_of(par)
                 j.leg = 1 + max(r.leg for r in results if lineage_of(r) == j.lineage)

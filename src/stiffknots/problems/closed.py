@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from stiffknots.engine.driver import AnnealSettings
+from stiffknots.engine.langevin import DEFAULT_STEPS as LANGEVIN_STEPS
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter
@@ -117,14 +118,20 @@ class ClosedAnneal(Problem):
             V.number("checkpoint_seconds", checkpoint_seconds, 0, lo_open=True)
         if target_epsilon is not None:
             V.number("target_epsilon", target_epsilon)
-        self.settings = AnnealSettings(moves=V.moves(default_moves(self.beads) if moves is None
-                                                     else moves),
+        if moves is None:
+            moves = (LANGEVIN_STEPS if schedule is not None and schedule.kind == "langevin"
+                     else default_moves(self.beads))
+        self.settings = AnnealSettings(moves=V.moves(moves),
                                        schedule=schedule or Schedule().for_beads(self.beads),
                                        params=(params or MoveParams()).for_beads(self.beads),
                                        quench_fraction=quench_fraction,
                                        target_epsilon=target_epsilon)
         self.settings.validate()
         self.settings.params.validate(self.beads)
+        if self.settings.schedule.kind == "langevin" and (
+                self.settings.params.exclusion != "bead" or tube_route):
+            raise InvalidParameter("schedule", "langevin", "with the bead rule and without the "
+                                   "tube route (its dynamics holds beads apart, not tubes)")
         #: the settings of the tube-route searches (:data:`TUBE_ROUTE_FROM`), None without
         self.tube_settings = None
         p = self.settings.params
@@ -166,12 +173,12 @@ class ClosedAnneal(Problem):
         """Continue each parent's search by :data:`LEG_HOPS` basin hops from its (polished)
         chain: the leg's plan is the hop stage of :class:`Schedule` alone — reheat to
         ``t_hop``, cool geometrically to ``t_end``, quench, polish; the lowest polished chain
-        so far is where the next hop starts. None with a tempering schedule (it has no
-        hops)."""
+        so far is where the next hop starts. None with a tempering or langevin schedule (they
+        have no hops)."""
         from dataclasses import replace
 
         sch = self.settings.schedule
-        if sch.kind == "tempering":
+        if sch.kind in ("tempering", "langevin"):
             return None
         leg = replace(sch, kind="geometric", t_start=sch.t_hop, relax_fraction=0.0,
                       hops=LEG_HOPS - 1, hop_fraction=(LEG_HOPS - 1) / LEG_HOPS)
