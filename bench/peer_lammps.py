@@ -14,12 +14,14 @@ its wall time to the same ε. The two never run at the same time (each gets one 
 table printed at the end gives the ratio LAMMPS s / stiffknots s-to-the-same-ε (wall clock,
 and CPU seconds in brackets: on a shared machine the wall clock includes time taken by other
 jobs) and medians; a second table does the same for LAMMPS stopped after its first 10⁵ CG
-iterations (almost all of the minimisation's gain). Two more tables time stiffknots' recipes
+iterations (almost all of the minimisation's gain). Three more tables time stiffknots' recipes
 that end with the final minimiser, each a ladder of budgets tried in turn from the same start
-(time summed over the rungs run): the Monte Carlo annealing (``run_polished``) and the
-Langevin schedule (``run_langevin_recipe``: the same dynamics as LAMMPS here, in stiffknots'
-compiled, passage-guarded kernel). Raw numbers, with both final chains, their shape class and
-closest bead and bond distances: bench/peer_lammps.json.
+(time summed over the rungs run, :func:`run_ladder`): the Monte Carlo annealing
+(``run_polished``), the Langevin schedule (``run_langevin_recipe``: the same dynamics as
+LAMMPS here, in stiffknots' compiled, passage-guarded kernel), and both engines' rungs
+interleaved cheapest first (``run_portfolio``, fixed before the run for every knot). Raw
+numbers, with both final chains, their shape class and closest bead and bond distances:
+bench/peer_lammps.json.
 
 The LAMMPS model (units lj, bond length 1, C = 1, k_B = 1, matching stiffknots):
 
@@ -284,70 +286,80 @@ def run_stiffknots(coords: np.ndarray, target: float, seed: int) -> dict:
 
 #: The polished recipe: anneal + polish with these move budgets, tried in turn (one core).
 LADDER = (1_000_000, 3_000_000, 10_000_000, 30_000_000)
+#: The collective recipe: guarded Langevin dynamics (the peer's own protocol, in stiffknots'
+#: compiled kernel) + the final minimiser, with these step budgets tried in turn (one core).
+LANGEVIN_LADDER = (300_000, 1_000_000, 3_000_000)
+#: Both engines' rungs interleaved, cheapest first (each ≈ 1, 1.4, 2.5, 3.9, 7, 11, 20 s):
+#: the recipe fixed before the run for both knots (the two ladders' rungs, in cost order).
+PORTFOLIO = (("mc", 1_000_000), ("langevin", 300_000), ("mc", 3_000_000),
+             ("langevin", 1_000_000), ("mc", 10_000_000), ("langevin", 3_000_000),
+             ("mc", 30_000_000))
+
+
+def _rung(kind: str, budget: int, coords: np.ndarray, seed: int) -> dict:
+    """One rung from ``coords``: the Monte Carlo annealing (``budget`` moves, default settings)
+    or the Langevin schedule (``budget`` steps), then the final minimiser (bead rule); timed
+    as a whole on this process (wall and CPU)."""
+    from stiffknots.engine.driver import AnnealSettings, run_replica
+    from stiffknots.engine.langevin import LangevinSettings, run_langevin
+    from stiffknots.engine.polish import polish
+    from stiffknots.engine.prims import energy_chain
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    if kind == "mc":
+        r = run_replica(coords, AnnealSettings(moves=budget), seed)
+        before, pos = float(r.epsilon), r.coords
+    else:
+        r = run_langevin(coords, LangevinSettings(steps=budget), seed)
+        before, pos = float(r.epsilon), r.pos
+    p = polish(pos)
+    dt, dc = time.perf_counter() - t0, time.process_time() - c0
+    return {"kind": kind, ("moves" if kind == "mc" else "steps"): budget,
+            "epsilon_before_polish": before,
+            "epsilon": float(energy_chain(p.pos, False)) * len(p.pos), "wall_seconds": dt,
+            "cpu_seconds": dc, "relative_kkt": float(p.relative_kkt), "coords": p.pos}
+
+
+def run_ladder(coords: np.ndarray, target: float, seed: int,
+               rungs: tuple[tuple[str, int], ...]) -> dict:
+    """The rungs (kind, budget) run in turn, each from ``coords``, until one ends at
+    ε ≤ ``target``; the time to the target is the *sum* over the rungs run, so the budget is
+    not chosen after the fact. ``reached`` None: no rung got there."""
+    done, wall, cpu, reached = [], 0.0, 0.0, None
+    for kind, budget in rungs:
+        r = _rung(kind, budget, coords, seed)
+        done.append(r)
+        wall, cpu = wall + r["wall_seconds"], cpu + r["cpu_seconds"]
+        if r["epsilon"] <= target:
+            reached = {"wall_seconds": wall, "cpu_seconds": cpu, "kind": kind,
+                       ("moves" if kind == "mc" else "steps"): budget}
+            break
+    return {"rungs": done, "reached": reached, "epsilon": done[-1]["epsilon"],
+            "coords": done[-1]["coords"]}
 
 
 def run_polished(coords: np.ndarray, target: float, seed: int,
                  ladder: tuple[int, ...] = LADDER) -> dict:
-    """stiffknots as shipped (annealing, then the final minimiser), timed to ``target``.
-
-    Each rung anneals the same start with ``moves`` moves (default settings otherwise) and
-    polishes the result (:func:`stiffknots.engine.polish.polish`, bead rule). The rungs run in
-    turn until one ends at ε ≤ target; the time to the target is the *sum* over the rungs
-    run, so the choice of budget is not made after the fact. None: no rung reached it.
-    """
-    from stiffknots.engine.driver import AnnealSettings, run_replica
-    from stiffknots.engine.polish import polish
-    from stiffknots.engine.prims import energy_chain
-
-    rungs, wall, cpu, reached = [], 0.0, 0.0, None
-    for moves in ladder:
-        t0, c0 = time.perf_counter(), time.process_time()
-        r = run_replica(coords, AnnealSettings(moves=moves), seed)
-        p = polish(r.coords)
-        dt, dc = time.perf_counter() - t0, time.process_time() - c0
-        wall, cpu = wall + dt, cpu + dc
-        eps = float(energy_chain(p.pos, False)) * len(p.pos)
-        rungs.append({"moves": moves, "epsilon_annealed": float(r.epsilon), "epsilon": eps,
-                      "wall_seconds": dt, "cpu_seconds": dc,
-                      "relative_kkt": float(p.relative_kkt), "coords": p.pos})
-        if eps <= target:
-            reached = {"wall_seconds": wall, "cpu_seconds": cpu, "moves": moves}
-            break
-    return {"rungs": rungs, "reached": reached, "epsilon": rungs[-1]["epsilon"],
-            "coords": rungs[-1]["coords"]}
-
-
-#: The collective recipe: guarded Langevin dynamics (the peer's own protocol, in stiffknots'
-#: compiled kernel) + the final minimiser, with these step budgets tried in turn (one core).
-LANGEVIN_LADDER = (300_000, 1_000_000, 3_000_000)
+    """stiffknots as shipped (annealing, then the final minimiser), timed to ``target``: the
+    Monte Carlo rungs of ``ladder`` (moves) in turn (:func:`run_ladder`)."""
+    return run_ladder(coords, target, seed, tuple(("mc", m) for m in ladder))
 
 
 def run_langevin_recipe(coords: np.ndarray, target: float, seed: int,
                         ladder: tuple[int, ...] = LANGEVIN_LADDER) -> dict:
     """stiffknots' Langevin schedule (:func:`stiffknots.engine.langevin.run_langevin`: the
     same model, schedule and steps as LAMMPS here, with the passage guard) then the final
-    minimiser (bead rule), timed to ``target`` like :func:`run_polished`: the rungs run in turn
-    until one ends at ε ≤ target, the time is the sum over the rungs run."""
-    from stiffknots.engine.langevin import LangevinSettings, run_langevin
-    from stiffknots.engine.polish import polish
-    from stiffknots.engine.prims import energy_chain
+    minimiser (bead rule), timed to ``target``: the rungs of ``ladder`` (steps) in turn."""
+    return run_ladder(coords, target, seed, tuple(("langevin", m) for m in ladder))
 
-    rungs, wall, cpu, reached = [], 0.0, 0.0, None
-    for steps in ladder:
-        t0, c0 = time.perf_counter(), time.process_time()
-        r = run_langevin(coords, LangevinSettings(steps=steps), seed)
-        p = polish(r.pos)
-        dt, dc = time.perf_counter() - t0, time.process_time() - c0
-        wall, cpu = wall + dt, cpu + dc
-        eps = float(energy_chain(p.pos, False)) * len(p.pos)
-        rungs.append({"steps": steps, "epsilon_dynamics": float(r.epsilon), "epsilon": eps,
-                      "wall_seconds": dt, "cpu_seconds": dc, "refused_steps": r.refused_steps,
-                      "relative_kkt": float(p.relative_kkt), "coords": p.pos})
-        if eps <= target:
-            reached = {"wall_seconds": wall, "cpu_seconds": cpu, "steps": steps}
-            break
-    return {"rungs": rungs, "reached": reached, "epsilon": rungs[-1]["epsilon"],
-            "coords": rungs[-1]["coords"]}
+
+def run_portfolio(coords: np.ndarray, target: float, seed: int,
+                  rungs: tuple[tuple[str, int], ...] = PORTFOLIO) -> dict:
+    """Both engines, their rungs interleaved cheapest first (:data:`PORTFOLIO`), timed to
+    ``target`` (:func:`run_ladder`): each engine reaches some states far sooner than the
+    other (3_1's circular braid: the annealing's relaxation; 4_1's crossing strands: the
+    collective dynamics), and the recipe does not know in advance which the knot needs."""
+    return run_ladder(coords, target, seed, rungs)
 
 
 def seconds_to(trace: dict, eps: float) -> float | None:
@@ -409,6 +421,48 @@ def _plain(coords: np.ndarray) -> list:
     return np.round(np.asarray(coords, dtype=float), 9).tolist()
 
 
+#: The recipes timed to LAMMPS's ε, each a ladder of rungs (:func:`run_ladder`): key in the
+#: rows and its table, function.
+RECIPES = (("polished", run_polished), ("langevin", run_langevin_recipe),
+           ("portfolio", run_portfolio))
+RECIPE_TITLES = {
+    "polished": "stiffknots as shipped — annealing then the final minimiser (polish), budgets "
+                + ", ".join(f"{m / 1e6:g} M" for m in LADDER) + " moves",
+    "langevin": "stiffknots' Langevin schedule — guarded Langevin dynamics (LAMMPS's model and "
+                "schedule, dt 0.005, damp 100) then the final minimiser, budgets "
+                + ", ".join(f"{m / 1e6:g} M" for m in LANGEVIN_LADDER) + " steps",
+    "portfolio": "both engines, rungs interleaved cheapest first — "
+                 + ", ".join(f"{'MC' if k == 'mc' else 'Langevin'} {b / 1e6:g} M"
+                             for k, b in PORTFOLIO),
+}
+
+
+def _budget(got: dict) -> str:
+    return (f"{got['moves']:,} moves" if "moves" in got else f"{got['steps']:,} steps")
+
+
+def _recipe_row(key: str, recipe, x: np.ndarray, name: str, seed: int, lm: dict,
+                log) -> dict:
+    """Run one recipe to LAMMPS's ε; its row entries (the recipe's record and the ratios)."""
+    from stiffknots.knots.identify import verify_knot
+
+    res = recipe(x, lm["epsilon"], seed)
+    xf = res.pop("coords")
+    for rung in res["rungs"]:
+        rung.pop("coords")
+    ok, found = verify_knot(xf, name)
+    res.update(knot_ok=bool(ok), knot_found=found, shape=_shape(xf),
+               min_nonbonded_distance=min_nonbonded_distance(xf), coords=_plain(xf))
+    got = res["reached"]
+    ratio = lm["wall_seconds"] / got["wall_seconds"] if got and ok else None
+    ratio_cpu = lm["cpu_seconds"] / got["cpu_seconds"] if got and ok else None
+    log(f"{name} seed {seed}: stiffknots {key} to ε ≤ {lm['epsilon']:.3f}: "
+        + (f"{got['wall_seconds']:.2f} s (CPU {got['cpu_seconds']:.2f} s, {_budget(got)}), "
+           f"ratio {ratio:.1f}× (CPU {ratio_cpu:.1f}×)" if got else "not reached")
+        + f"; final ε {res['epsilon']:.4f} ({res['shape']}, knot {found})")
+    return {key: res, f"ratio_{key}": ratio, f"ratio_{key}_cpu": ratio_cpu}
+
+
 def compare(knots: list[str], seeds: list[int], beads: int = 150, steps: int = 1_000_000,
             log=print, **lammps_options) -> dict:
     """LAMMPS then stiffknots, one after the other, for every knot and seed."""
@@ -452,46 +506,8 @@ def compare(knots: list[str], seeds: list[int], beads: int = 150, steps: int = 1
                                 "lammps_seconds": lm["early"]["wall_seconds"],
                                 "stiffknots_seconds": te,
                                 "ratio": lm["early"]["wall_seconds"] / te if te else None}
-                pol = run_polished(x, lm["epsilon"], seed)
-                xp = pol.pop("coords")
-                for rung in pol["rungs"]:
-                    rung.pop("coords")
-                p_ok, p_found = verify_knot(xp, name)
-                pol.update(knot_ok=bool(p_ok), knot_found=p_found, shape=_shape(xp),
-                           min_nonbonded_distance=min_nonbonded_distance(xp),
-                           coords=_plain(xp))
-                row["polished"] = pol
-                got = pol["reached"]
-                row["ratio_polished"] = (lm["wall_seconds"] / got["wall_seconds"]
-                                         if got and p_ok else None)
-                row["ratio_polished_cpu"] = (lm["cpu_seconds"] / got["cpu_seconds"]
-                                             if got and p_ok else None)
-                log(f"{name} seed {seed}: stiffknots anneal + polish to ε ≤ "
-                    f"{lm['epsilon']:.3f}: "
-                    + (f"{got['wall_seconds']:.2f} s (CPU {got['cpu_seconds']:.2f} s, "
-                       f"{got['moves']:,} moves), ratio {row['ratio_polished']:.1f}× "
-                       f"(CPU {row['ratio_polished_cpu']:.1f}×)" if got else "not reached")
-                    + f"; final ε {pol['epsilon']:.4f} ({pol['shape']}, knot {p_found})")
-                lg = run_langevin_recipe(x, lm["epsilon"], seed)
-                xl = lg.pop("coords")
-                for rung in lg["rungs"]:
-                    rung.pop("coords")
-                l_ok, l_found = verify_knot(xl, name)
-                lg.update(knot_ok=bool(l_ok), knot_found=l_found, shape=_shape(xl),
-                          min_nonbonded_distance=min_nonbonded_distance(xl),
-                          coords=_plain(xl))
-                row["langevin"] = lg
-                got = lg["reached"]
-                row["ratio_langevin"] = (lm["wall_seconds"] / got["wall_seconds"]
-                                         if got and l_ok else None)
-                row["ratio_langevin_cpu"] = (lm["cpu_seconds"] / got["cpu_seconds"]
-                                             if got and l_ok else None)
-                log(f"{name} seed {seed}: stiffknots Langevin + polish to ε ≤ "
-                    f"{lm['epsilon']:.3f}: "
-                    + (f"{got['wall_seconds']:.2f} s (CPU {got['cpu_seconds']:.2f} s, "
-                       f"{got['steps']:,} steps), ratio {row['ratio_langevin']:.1f}× "
-                       f"(CPU {row['ratio_langevin_cpu']:.1f}×)" if got else "not reached")
-                    + f"; final ε {lg['epsilon']:.4f} ({lg['shape']}, knot {l_found})")
+                for key, recipe in RECIPES:
+                    row.update(_recipe_row(key, recipe, x, name, seed, lm, log))
                 log(f"{name} seed {seed}: stiffknots to ε ≤ {lm['epsilon']:.3f}: "
                     f"{_fmt(t, '{:.2f}')} s (CPU {_fmt(tc, '{:.2f}')} s), final ε "
                     f"{sk['epsilon']:.3f} (whole run {sk['wall_time']:.1f} s, knot {sk_found}, "
@@ -568,54 +584,29 @@ def table(result: dict) -> str:
                 f"| {name} | median | {med([e['lammps_epsilon'] for e in es]):.3f} "
                 f"| {med([e['lammps_seconds'] for e in es]):.1f} | {_t(float(med(t)))} "
                 f"| {_x(float(med([e['ratio'] or 0.0 for e in es])))} |")
-    pol = [r for r in result["rows"] if r.get("polished")]
-    if pol:
-        lines += ["", "stiffknots as shipped — annealing then the final minimiser (polish), "
-                  f"budgets {', '.join(f'{m / 1e6:g} M' for m in LADDER)} moves tried in turn, "
-                  "time summed over the rungs run — to LAMMPS's ε (one core each):", "",
+    for key in RECIPE_TITLES:
+        rows = [r for r in result["rows"] if r.get(key)]
+        if not rows:
+            continue
+        lines += ["", f"{RECIPE_TITLES[key]}, tried in turn, time summed over the rungs run — "
+                  "to LAMMPS's ε (one core each):", "",
                   "| knot | seed | LAMMPS ε | LAMMPS s (CPU) | stiffknots ε (shape) "
-                  "| stiffknots s (CPU) | moves | ratio (CPU) |", "|" + "---|" * 8]
-        for r in pol:
-            lm, p = r["lammps"], r["polished"]
-            got = p["reached"] or {}
-            lines.append(
-                f"| {r['knot']} | {r['seed']} | {lm['epsilon']:.4f} "
-                f"| {lm['wall_seconds']:.1f} ({lm['cpu_seconds']:.1f}) "
-                f"| {p['epsilon']:.4f} ({p['shape']}) "
-                f"| {_t(got.get('wall_seconds'))} ({_t(got.get('cpu_seconds'))}) "
-                f"| {got.get('moves', '—'):,} " if got else
-                f"| {r['knot']} | {r['seed']} | {lm['epsilon']:.4f} "
-                f"| {lm['wall_seconds']:.1f} ({lm['cpu_seconds']:.1f}) "
-                f"| {p['epsilon']:.4f} ({p['shape']}) | never | — ")
-            lines[-1] += f"| {_x(r['ratio_polished'])} ({_x(r['ratio_polished_cpu'])}) |"
-        for name in dict.fromkeys(r["knot"] for r in pol):
-            rs = [r for r in pol if r["knot"] == name]
-            lines.append(f"| {name} | median | | | | | "
-                         f"| {_x(float(med([r['ratio_polished'] or 0.0 for r in rs])))} "
-                         f"({_x(float(med([r['ratio_polished_cpu'] or 0.0 for r in rs])))}) |")
-    lgv = [r for r in result["rows"] if r.get("langevin")]
-    if lgv:
-        lines += ["", "stiffknots' Langevin schedule — guarded Langevin dynamics (LAMMPS's "
-                  "model and schedule, dt 0.005, damp 100) then the final minimiser, budgets "
-                  f"{', '.join(f'{m / 1e6:g} M' for m in LANGEVIN_LADDER)} steps tried in "
-                  "turn, time summed over the rungs run — to LAMMPS's ε (one core each):", "",
-                  "| knot | seed | LAMMPS ε | LAMMPS s (CPU) | stiffknots ε (shape) "
-                  "| stiffknots s (CPU) | steps | ratio (CPU) |", "|" + "---|" * 8]
-        for r in lgv:
-            lm, p = r["lammps"], r["langevin"]
+                  "| stiffknots s (CPU) | budget | ratio (CPU) |", "|" + "---|" * 8]
+        for r in rows:
+            lm, p = r["lammps"], r[key]
             got = p["reached"] or {}
             mid = (f"| {_t(got.get('wall_seconds'))} ({_t(got.get('cpu_seconds'))}) "
-                   f"| {got['steps']:,} " if got else "| never | — ")
+                   f"| {_budget(got)} " if got else "| never | — ")
             lines.append(
                 f"| {r['knot']} | {r['seed']} | {lm['epsilon']:.4f} "
                 f"| {lm['wall_seconds']:.1f} ({lm['cpu_seconds']:.1f}) "
                 f"| {p['epsilon']:.4f} ({p['shape']}) " + mid
-                + f"| {_x(r['ratio_langevin'])} ({_x(r['ratio_langevin_cpu'])}) |")
-        for name in dict.fromkeys(r["knot"] for r in lgv):
-            rs = [r for r in lgv if r["knot"] == name]
+                + f"| {_x(r[f'ratio_{key}'])} ({_x(r[f'ratio_{key}_cpu'])}) |")
+        for name in dict.fromkeys(r["knot"] for r in rows):
+            rs = [r for r in rows if r["knot"] == name]
             lines.append(f"| {name} | median | | | | | "
-                         f"| {_x(float(med([r['ratio_langevin'] or 0.0 for r in rs])))} "
-                         f"({_x(float(med([r['ratio_langevin_cpu'] or 0.0 for r in rs])))}) |")
+                         f"| {_x(float(med([r[f'ratio_{key}'] or 0.0 for r in rs])))} "
+                         f"({_x(float(med([r[f'ratio_{key}_cpu'] or 0.0 for r in rs])))}) |")
     load = result.get("load_average")
     if load:
         lines += ["", f"load average (1, 5, 15 min) before {load['before']}, "

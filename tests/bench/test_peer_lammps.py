@@ -81,3 +81,15 @@ def test_langevin_recipe_stops_at_the_first_rung_that_reaches_the_target(peer):
     from stiffknots.knots.identify import verify_knot
 
     assert verify_knot(hard["coords"], "3_1")[0]
+
+
+def test_portfolio_runs_both_engines_in_its_order_until_the_target(peer):
+    x = peer.starting_chain("3_1", 80)
+    rungs = (("mc", 20_000), ("langevin", 3_000), ("mc", 30_000))
+    res = peer.run_portfolio(x, 1.0, seed=2, rungs=rungs)  # unreachable: every rung runs
+    assert [(r["kind"], r.get("moves", r.get("steps"))) for r in res["rungs"]] == list(rungs)
+    assert res["reached"] is None
+    easy = peer.run_portfolio(x, 1e9, seed=2, rungs=rungs)
+    assert len(easy["rungs"]) == 1 and easy["reached"]["kind"] == "mc"
+    assert easy["reached"]["wall_seconds"] == easy["rungs"][0]["wall_seconds"]
+    assert peer.PORTFOLIO[0][0] == "mc" and {k for k, _ in peer.PORTFOLIO} == {"mc", "langevin"}
