@@ -214,6 +214,19 @@ def forces(pos, k_bond, sigma, rc2, pi, pj, npairs, f, gb, ub, il):
 
 
 @njit(cache=True, inline="always")
+def _pair_slack(k, n, pa, pb, pd, poff, cum, m):
+    """Listed pair k's running bound after this step, D_ab − e_a − e_b (module docstring),
+    and its beads a, a+1, b, b+1."""
+    a = pa[k]
+    a1 = a + 1 if a < n - 1 else 0
+    b = pb[k]
+    b1 = b + 1 if b < n - 1 else 0
+    ea = max(cum[a] + m[a] - poff[k, 0], cum[a1] + m[a1] - poff[k, 1])
+    eb = max(cum[b] + m[b] - poff[k, 2], cum[b1] + m[b1] - poff[k, 3])
+    return pd[k] - ea - eb, a, a1, b, b1
+
+
+@njit(cache=True, inline="always")
 def _freeze(i, pos, old, vel, m):
     """Bead i stays where it was this step, its velocity reversed."""
     for q in range(3):
@@ -321,13 +334,8 @@ def run_dynamics(pos, vel, steps, dt, gamma, t_start, t_end, k_bond, contact, sk
             while changed:
                 changed = False
                 for k in range(nclose):
-                    a = pa[k]
-                    a1 = a + 1 if a < n - 1 else 0
-                    b = pb[k]
-                    b1 = b + 1 if b < n - 1 else 0
-                    ea = max(cum[a] + m[a] - poff[k, 0], cum[a1] + m[a1] - poff[k, 1])
-                    eb = max(cum[b] + m[b] - poff[k, 2], cum[b1] + m[b1] - poff[k, 3])
-                    if pd[k] - ea - eb > eta:
+                    slack, a, a1, b, b1 = _pair_slack(k, n, pa, pb, pd, poff, cum, m)
+                    if slack > eta:
                         continue
                     lip = max(m[a], m[a1]) + max(m[b], m[b1])
                     if (_seg_dist(old, a, a1, b, b1) + _seg_dist(pos, a, a1, b, b1) - lip
@@ -340,13 +348,8 @@ def run_dynamics(pos, vel, steps, dt, gamma, t_start, t_end, k_bond, contact, sk
                             changed = True
             # the pairs certified by their own distances start a new bound after the step
             for k in range(nclose):
-                a = pa[k]
-                a1 = a + 1 if a < n - 1 else 0
-                b = pb[k]
-                b1 = b + 1 if b < n - 1 else 0
-                ea = max(cum[a] + m[a] - poff[k, 0], cum[a1] + m[a1] - poff[k, 1])
-                eb = max(cum[b] + m[b] - poff[k, 2], cum[b1] + m[b1] - poff[k, 3])
-                if pd[k] - ea - eb > eta:
+                slack, a, a1, b, b1 = _pair_slack(k, n, pa, pb, pd, poff, cum, m)
+                if slack > eta:
                     continue
                 d0 = _seg_dist(old, a, a1, b, b1)
                 pd[k] = _seg_dist(pos, a, a1, b, b1)
