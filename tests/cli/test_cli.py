@@ -216,7 +216,7 @@ def test_anneal_unconverged_bead_rule_points_to_the_tube_model():
     assert rc == 0, err
     flat = " ".join(out.split())
     assert "NOT converged" in flat and " ".join(first.split()) in flat
-    assert "--exclusion tube" in flat
+    assert "--exclusion tube" in flat and "--schedule langevin" in flat
     for extra in (("--rounds", "1"), ("--rounds", "2", "--exclusion", "tube")):
         rc, out, err = run(*base, *extra, "--no-polish")
         assert rc == 0, err

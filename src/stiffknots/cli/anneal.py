@@ -62,6 +62,11 @@ BEAD_HINT = ("the bead rule's minima lie within tenths of a percent of each othe
              "a statistical statement: another seed found a lower state for 9 of 39 bead-rule "
              "verdicts (by 0.1-1.3 %) and 5 of 65 tube verdicts (8_13: 216.4 against 278.5); "
              "another --seed checks it")
+#: what an unconverged bead-rule run of the annealing adds (bench/RESULTS.md, 2026-12-04)
+LANGEVIN_HINT = ("The Langevin schedule (--schedule langevin: every bead moves at every step) "
+                 "converges for 28 of the 35 in 12 min and ends lower than the annealing's "
+                 "searches on 11 of them (8_11: 210.2 against 251.0); 7 of its 28 verdicts lie "
+                 "above a state another search found")
 
 
 def anneal(
@@ -292,7 +297,8 @@ def anneal(
                   "228.8 fresh, 163.9 from its N = 150 ground): try --coarse 150",
                   markup=False, highlight=False)
     if not res.converged and params.exclusion == "bead" and rounds > 1:
-        out.print(BEAD_HINT, markup=False, highlight=False)
+        out.print(BEAD_HINT + (". " + LANGEVIN_HINT if schedule != "langevin" else ""),
+                  markup=False, highlight=False)
     below = (res.thin_limit.get("excess") or 0.0) < 0
     where = ("below the thin limit of its shape: the discretisation of N beads lowers ε more "
              "than the width raises it" if below

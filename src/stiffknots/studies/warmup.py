@@ -27,9 +27,10 @@ def cache_is_cold() -> bool:
 
 
 def warmup(log: Callable[[str], None] | None = None) -> float:
-    """Run a few tiny problems in this process (closed anneal in both exclusion models, open
-    knots at fixed extension and force, the restricted-curvature search, shape analysis, the
-    resampling of a curve and its measures) so that numba compiles and caches every kernel
+    """Run a few tiny problems in this process (closed anneal in both exclusion models and
+    with the Langevin schedule, open knots at fixed extension and force, the
+    restricted-curvature search, shape analysis, the resampling of a curve and its measures)
+    so that numba compiles and caches every kernel
     they use. Returns the seconds it took."""
     from stiffknots.chain import Chain
     from stiffknots.engine.params import MoveParams
@@ -54,6 +55,11 @@ def warmup(log: Callable[[str], None] | None = None) -> float:
     anneal_open("3_1", excess_length=20, moves=2_000, replicas=1, workers=1)
     anneal_open_force("3_1", 0.05, moves=50_000, replicas=1, workers=1)  # end moves too
     tightest("3_1", beads=40, moves=10_000, replicas=1, workers=1)
+    # the Langevin schedule's kernel (anneal --schedule langevin)
+    from stiffknots.engine.schedules import Schedule
+
+    anneal("3_1", moves=2_000, replicas=1, rounds=1, workers=1,
+           schedule=Schedule(kind="langevin", t_end=1e-4))
     dt = time.perf_counter() - t0
     say(f"kernels compiled and cached in {dt:.0f} s" if cold
         else f"kernels loaded from the cache in {dt:.0f} s")
