@@ -217,6 +217,8 @@ def test_replica_of_the_schedule_and_its_limits():
     assert r.replica == 3 and r.best_stage == "langevin"
     assert r.epsilon == pytest.approx(unit_epsilon(r.coords), rel=1e-10)
     assert r.langevin["refused_steps"] >= 0 and r.traces["moves"][-1] == 5_000
+    sec = np.asarray(r.traces["seconds"])  # measured at the end of each chunk
+    assert np.all(np.diff(sec) > 0) and 0 < sec[-1] <= r.wall_time
     tube = AnnealSettings(moves=5_000, schedule=Schedule(kind="langevin"),
                           params=MoveParams(exclusion="tube"))
     with pytest.raises(InvalidParameter, match="bead rule"):

@@ -109,6 +109,7 @@ class LangevinResult:
     trace_steps: np.ndarray
     trace_temperature: np.ndarray
     trace_epsilon: np.ndarray
+    trace_seconds: np.ndarray
 
 
 def unit_epsilon(pos: np.ndarray) -> float:
@@ -211,7 +212,7 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
     per = [p for p in per if p > 0]
     ratio = s.t_end / s.t_start
     done = 0
-    tr_steps, tr_temp, tr_eps = [], [], []
+    tr_steps, tr_temp, tr_eps, tr_sec = [], [], [], []
     for p in per:
         ta = s.t_start * ratio ** (done / s.steps)
         tb = s.t_start * ratio ** ((done + p) / s.steps)
@@ -229,6 +230,7 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
         tr_steps.append(done)
         tr_temp.append(tb)
         tr_eps.append(eps)
+        tr_sec.append(time.perf_counter() - t0)
         if progress is not None:
             progress({"done": done, "total": s.steps, "epsilon": eps, "temperature": tb})
     eps_md = unit_epsilon(x)
@@ -268,7 +270,8 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
         refused_steps=refused, guard_checks=checks, list_builds=builds,
         lowest_guard_distance=lowest, wall_time=time.perf_counter() - t0,
         cpu_time=time.process_time() - c0, trace_steps=np.asarray(tr_steps, dtype=np.int64),
-        trace_temperature=np.asarray(tr_temp), trace_epsilon=np.asarray(tr_eps))
+        trace_temperature=np.asarray(tr_temp), trace_epsilon=np.asarray(tr_eps),
+        trace_seconds=np.asarray(tr_sec))
 
 
 def guard_distance_of(pos: np.ndarray, cap: float = 0.5) -> float:
@@ -323,7 +326,7 @@ def run_langevin_replica(coords: np.ndarray, settings, seed: int, replica: int =
                      "rate": 1.0 - res.refused_steps / ls.steps}}
     traces = {"moves": list(res.trace_steps), "temperature": list(res.trace_temperature),
               "epsilon": list(res.trace_epsilon),
-              "seconds": list(np.linspace(0, res.wall_time, len(res.trace_steps) + 1)[1:])}
+              "seconds": list(res.trace_seconds)}  # wall seconds at the end of each chunk
     return make_result(replica, seed, settings, state, acc, traces, clock, (None, None),
                        stage_epsilon={"langevin": res.epsilon}, best_stage="langevin",
                        langevin={"epsilon_dynamics": res.epsilon_dynamics,
