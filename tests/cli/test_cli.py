@@ -102,6 +102,8 @@ def test_anneal_coarse_to_fine(tmp_path):
     c = d["coarse"]
     assert c["beads"] == 30 and c["replicas"] == 2 and "N = 30" in c["width"]["text"]
     assert c["epsilon"] >= d["bounds"]["lower"] * 0.99
+    # the chain taken is the lowest that resamples with the rule held (here the lowest)
+    assert c["epsilon"] >= c["lowest_epsilon"] and isinstance(c["replica"], int)
     assert d["beads"] == 60 and d["knot_verified"] and "N = 60" in d["width"]["text"]
     for args, msg in [(("--coarse", "60"), "--coarse must be fewer beads than --beads (60)"),
                       (("--coarse", "30", "--from", "x.xyz"), "--coarse and --from both"),

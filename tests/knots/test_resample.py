@@ -83,3 +83,25 @@ def test_a_slid_unit_chain_resamples_to_unit_bonds(t):
     bonds = np.linalg.norm(np.roll(c.coords, -1, axis=0) - c.coords, axis=1)
     assert np.max(np.abs(bonds - 1.0)) <= 1e-12
     assert c.meta["homfly"] == homfly_code(x)
+
+
+def test_touching_strands_are_a_clear_error_not_a_search_failure():
+    """A bead-rule 4_1 whose strands touch where they cross (10⁻⁴ apart, ε 127.5445): no
+    number of beads certifies its resampling, and the error says so (it was the bead search's
+    "no number of beads up to 20000 satisfies the condition")."""
+    from stiffknots.knots.resample import ResampleError, resample
+
+    x = np.load(DATA / "resample" / "4_1_bead_touching.npy")
+    assert Chain(x, True).min_segment_distance() < 2e-4
+    with pytest.raises(ResampleError, match="touching strands.*|none up to 20,000"):
+        resample(Chain(x, True), 300)
+
+
+def test_a_repeated_point_in_the_certification_is_no_division_by_zero():
+    """A bead-rule 4_1 (ε 127.4595) resampled to 300 beads: the certification met a polygon
+    edge of zero length and divided by zero; now the error names the beads it needs."""
+    from stiffknots.knots.resample import ResampleError, resample
+
+    x = np.load(DATA / "resample" / "4_1_bead_other.npy")
+    with pytest.raises(ResampleError, match=r"an integer >= \d+ for this curve"):
+        resample(Chain(x, True), 300)

@@ -220,7 +220,7 @@ def anneal(
     with WorkerPool(default_workers(replicas)).start() as pool:
         if coarse is not None:
             initial, coarse_d = _coarse_stage(name, coarse, replicas, seed, params, start,
-                                              polish, json_, pool)
+                                              polish, json_, pool, beads)
         problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                                schedule=sch, params=params, checkpoint_dir=checkpoint,
                                resume=resume, start=start, rounds=rounds, initial=initial,
@@ -281,7 +281,11 @@ def anneal(
         out.print(f"coarse stage: N = {coarse_d['beads']}, ε = {coarse_d['epsilon']:.4f} "
                   f"({coarse_d['shape']}, {coarse_d['width']['text']}; "
                   f"{'converged' if coarse_d['converged'] else 'not converged'}), its lowest "
-                  f"chain resampled to N = {beads} started every replica above",
+                  f"chain resampled to N = {beads} started every replica above"
+                  + ("" if coarse_d["epsilon"] == coarse_d["lowest_epsilon"] else
+                     f" (its lowest, ε = {coarse_d['lowest_epsilon']:.4f}, does not resample "
+                     "with its knot type certified and the exclusion rule held — strands that "
+                     "touch or nearly touch where they cross: the lowest chain that does)"),
                   markup=False, highlight=False)
     b = res.bounds
     out.print(f"shape of the best chain: {obs['label']}"
@@ -315,14 +319,18 @@ def anneal(
 
 
 def _coarse_stage(name: str, beads: int, replicas: int, seed: int, params, start: str,
-                  polish: bool, quiet: bool, pool) -> tuple:
+                  polish: bool, quiet: bool, pool, fine_beads: int) -> tuple:
     """``--coarse``: anneal ``name`` at ``beads`` beads (default moves and schedule for that
     N, two rounds: every default start tried; the fine run's move parameters — exclusion,
     diameter in bond units, δ — with the default m_max of that N; the same seed) and return
-    its lowest chain (the start of the fine run, resampled there) and what to report of it."""
+    its lowest chain that can be resampled to ``fine_beads`` with its knot type certified (the
+    start of the fine run, its exclusion rule held) and what to report of it. A bead-rule
+    chain whose strands touch at a crossing (4_1's `other` states: 10⁻⁴ apart) cannot be: the
+    next lowest is taken, and the report says so."""
     from dataclasses import replace
 
     from stiffknots.chain import Chain
+    from stiffknots.knots.resample import ResampleError, resample
     from stiffknots.problems.base import solve
     from stiffknots.problems.closed import ClosedAnneal
 
@@ -334,9 +342,25 @@ def _coarse_stage(name: str, beads: int, replicas: int, seed: int, params, start
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True,
                     pool=pool)
     check_interrupted(res, None)
-    obs = res.best.observables
-    info = {"beads": beads, "epsilon": res.best.epsilon, "shape": obs["shape"],
+    for r in res.replicas:  # lowest first
+        try:
+            x = resample(Chain(r.coords, True), fine_beads)
+        except ResampleError:
+            continue
+        # the fine run's rule must hold on the resampled chain (new beads near a touching
+        # crossing come closer than d to the other strand)
+        if (x.min_bead_distance() >= params.d if params.exclusion == "bead"
+                else x.min_segment_distance() >= params.w):
+            break
+    else:
+        raise UserError(f"--coarse {beads}: none of the {len(res.replicas)} coarse chains of "
+                        f"{res.knot} resamples to {fine_beads} beads with its knot type "
+                        "certified and the exclusion rule held (strands touch where they "
+                        "cross); run without --coarse")
+    obs = r.observables
+    info = {"beads": beads, "epsilon": r.epsilon, "shape": obs["shape"],
+            "lowest_epsilon": res.best.epsilon, "replica": r.replica,
             "converged": res.converged, "convergence": res.convergence,
             "width": width_of(params, beads), "replicas": len(res.replicas),
             "wall_time": res.wall_time}
-    return Chain(res.best.coords, True), info
+    return Chain(r.coords, True), info

@@ -51,6 +51,10 @@ from stiffknots.geometry import seg_dist2
 __all__ = ["resample", "minimal_resample_beads", "separation_distance", "ResampleError"]
 
 
+#: the most beads :func:`minimal_resample_beads` tries for a curve in :func:`resample`'s errors
+RESAMPLE_LIMIT = 20_000
+
+
 class ResampleError(InvalidParameter):
     """``n_beads`` too small for the curve (the message names the smallest that works)."""
 
@@ -263,8 +267,9 @@ def _pierced(t0, t1, t2, poly, skip_a, skip_b, tol):
         d = q - p
         h = np.cross(d, e2)
         a = np.dot(e1, h)
-        if abs(a) < tol * area2 * math.sqrt(np.dot(d, d)):
-            # segment parallel to the plane: conservative when it lies in it
+        if abs(a) <= tol * area2 * math.sqrt(np.dot(d, d)):
+            # segment parallel to the plane (or of zero length, a = 0: a repeated point of
+            # the polygon, once a ZeroDivisionError): conservative when it lies in it
             dist = abs(np.dot(p - t0, nrm)) / area2
             if dist < tol:
                 lo = np.minimum(np.minimum(t0, t1), t2)
@@ -406,7 +411,19 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
     ok, a_max, D, (pts, ell, s, cum) = _condition(x, n)
     if not ok and not (certify and _certify(x, cum, s, n)):
         # the sufficient condition fails and the Δ-moves cannot be certified one by one
-        need = minimal_resample_beads(x, start=n)
+        length = float(np.sum(np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)))
+        try:
+            # arcs of length/N must be shorter than D (≤ its value at this N): no N up to
+            # the limit can do when length/D exceeds it — say so without the long search
+            if length > RESAMPLE_LIMIT * D:
+                raise ValueError("strands (nearly) touch")
+            need = minimal_resample_beads(x, start=n, limit=RESAMPLE_LIMIT)
+        except ValueError:  # none up to the limit: strands (nearly) touch
+            raise ResampleError(
+                "n_beads", n, "a number of beads that certifies this curve's knot type (none "
+                f"up to {RESAMPLE_LIMIT:,} does)",
+                note=f"two non-neighbouring parts of the curve come within {D:.2g} of each "
+                     "other (touching strands)") from None
         raise ResampleError(
             "n_beads", n, f"an integer >= {need} for this curve",
             note=f"the arcs between beads ({a_max:.4g}) must be shorter than the distance "
