@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
-from stiffknots.engine.langevin_kernel import guard_distance, run_dynamics
+from stiffknots.engine.langevin_kernel import run_dynamics
 from stiffknots.engine.prims import check_state, energy_chain, new_rng_state
 from stiffknots.errors import ChainGeometryError, InvalidParameter
 
@@ -92,7 +92,9 @@ class LangevinSettings:
 
 @dataclass
 class LangevinResult:
-    """What :func:`run_langevin` did. ``pos``: the admissible unit-bond chain it ends on."""
+    """What :func:`run_langevin` did. ``pos``: the admissible unit-bond chain it ends on;
+    ``refused_steps``: bead-steps the passage guard held back (a bead kept in place for one
+    step, its velocity reversed), summed over the beads, dynamics and settling."""
 
     pos: np.ndarray
     epsilon: float
@@ -233,7 +235,7 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
         tr_sec.append(time.perf_counter() - t0)
         if progress is not None:
             progress({"done": done, "total": s.steps, "epsilon": eps, "temperature": tb})
-    eps_md = unit_epsilon(x)
+    eps_md = tr_eps[-1]  # the chain as the dynamics left it
     # the settling: blocks of QUENCH_STEPS at t_end with strong friction (γ = 1) until the
     # chain projects onto unit bonds without passage and obeys the bead rule (a short or hot
     # run can end with beads pressed inside the wall); the same guarded kernel
@@ -272,11 +274,6 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
         cpu_time=time.process_time() - c0, trace_steps=np.asarray(tr_steps, dtype=np.int64),
         trace_temperature=np.asarray(tr_temp), trace_epsilon=np.asarray(tr_eps),
         trace_seconds=np.asarray(tr_sec))
-
-
-def guard_distance_of(pos: np.ndarray, cap: float = 0.5) -> float:
-    """The guard's D (module :mod:`~stiffknots.engine.langevin_kernel`) of a closed chain."""
-    return float(guard_distance(np.ascontiguousarray(pos, dtype=float), float(cap)))
 
 
 def settings_from(settings) -> LangevinSettings:
@@ -322,8 +319,7 @@ def run_langevin_replica(coords: np.ndarray, settings, seed: int, replica: int =
     state = ChainState(res.pos, p, seed=0, ensemble=settings.ensemble)
     acc = {"single": {"tried": 0, "accepted": 0, "rate": 0.0},
            "multi": {"tried": 0, "accepted": 0, "rate": 0.0},
-           "steps": {"tried": ls.steps, "accepted": ls.steps - res.refused_steps,
-                     "rate": 1.0 - res.refused_steps / ls.steps}}
+           "steps": {"tried": ls.steps, "frozen_bead_steps": res.refused_steps}}
     traces = {"moves": list(res.trace_steps), "temperature": list(res.trace_temperature),
               "epsilon": list(res.trace_epsilon),
               "seconds": list(res.trace_seconds)}  # wall seconds at the end of each chunk
