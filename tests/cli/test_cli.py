@@ -151,12 +151,18 @@ def test_anneal_command_defaults_are_the_library_defaults():
     import inspect
 
     from stiffknots.cli.anneal import anneal as command
+    from stiffknots.cli.anneal import pick_schedule
     from stiffknots.engine.schedules import Schedule
-    from stiffknots.problems.closed import DEFAULT_ROUNDS
+    from stiffknots.problems.closed import DEFAULT_ROUNDS, LANGEVIN_ROUNDS
 
     sig = inspect.signature(command)
-    assert sig.parameters["rounds"].default == DEFAULT_ROUNDS
-    assert sig.parameters["schedule"].default == Schedule().kind
+    # the command's default (auto) is the library's langevin schedule and rounds for the bead
+    # rule, and the library's default schedule and rounds with an option of the Monte Carlo
+    assert sig.parameters["schedule"].default == "auto"
+    assert sig.parameters["rounds"].default is None
+    assert pick_schedule("auto", [], None)[:2] == ("langevin", LANGEVIN_ROUNDS)
+    assert pick_schedule("auto", ["--checkpoint"], None)[:2] == (Schedule().kind,
+                                                                DEFAULT_ROUNDS)
     assert sig.parameters["replicas"].default == 2
 
 
@@ -209,20 +215,45 @@ def test_help_texts_are_reflowed_paragraphs():
 
 def test_anneal_unconverged_bead_rule_points_to_the_tube_model():
     """An adaptive bead-rule run that ends without a verdict says why bead-rule searches rarely
-    meet and names the tube model; a tube run, or a fixed budget (--rounds 1), does not."""
+    meet and names the tube model and the other engine; a tube run, or a fixed budget
+    (--rounds 1), does not."""
     from stiffknots.cli.anneal import BEAD_HINT
 
     first = BEAD_HINT.split(":")[0]
     base = ("anneal", "6_3", "--moves", "20000", "--replicas", "1")
-    rc, out, err = run(*base, "--rounds", "2", "--no-polish")
-    assert rc == 0, err
-    flat = " ".join(out.split())
-    assert "NOT converged" in flat and " ".join(first.split()) in flat
-    assert "--exclusion tube" in flat and "--schedule langevin" in flat
+    for engine, other in (((), "--schedule geometric"),  # the default: the dynamics
+                          (("--schedule", "geometric"), "--schedule langevin")):
+        rc, out, err = run(*base, *engine, "--rounds", "2", "--no-polish")
+        assert rc == 0, err
+        flat = " ".join(out.split())
+        assert "NOT converged" in flat and " ".join(first.split()) in flat
+        assert "--exclusion tube" in flat and other in flat
     for extra in (("--rounds", "1"), ("--rounds", "2", "--exclusion", "tube")):
         rc, out, err = run(*base, *extra, "--no-polish")
         assert rc == 0, err
         assert " ".join(first.split()) not in " ".join(out.split())
+
+
+def test_anneal_schedule_auto_is_the_dynamics_unless_a_monte_carlo_option():
+    """`anneal`'s default schedule (auto) runs the Langevin dynamics for the bead rule, with
+    64 rounds at most; an option of the Monte Carlo (tube model, its moves' parameters …) runs
+    the paper's annealing with 8; the result says which and why."""
+    from stiffknots.cli.anneal import pick_schedule
+
+    assert pick_schedule("auto", [], None)[:2] == ("langevin", 64)
+    assert pick_schedule("auto", ["--exclusion tube"], None)[:2] == ("geometric", 8)
+    assert pick_schedule("auto", [], 3)[:2] == ("langevin", 3)
+    assert pick_schedule("geometric", [], None)[:2] == ("geometric", 8)
+    assert pick_schedule("langevin", [], None)[:2] == ("langevin", 64)
+    for extra, kind, why in (((), "langevin", "the bead rule's default"),
+                             (("--exclusion", "tube"), "geometric", "with --exclusion tube"),
+                             (("--delta", "0.02"), "geometric", "with --delta")):
+        rc, out, err = run("anneal", "3_1", "--moves", "4000", "--rounds", "1",
+                           "--replicas", "1", "--no-polish", "--json", *extra)
+        assert rc == 0, err
+        d = json.loads(out)
+        assert d["settings"]["schedule"]["kind"] == d["schedule"] == kind
+        assert why in d["schedule_choice"] and d["max_rounds"] == 1
 
 
 def test_anneal_with_the_langevin_schedule():

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Annotated
 
 import typer
@@ -52,21 +51,63 @@ def _thin_beads(name: str, w_over_l: float) -> int:
 #: the N from which an unconverged run suggests ``--coarse`` (bench/RESULTS.md, sixth session)
 COARSE_HINT_FROM = 300
 
-#: what an adaptive bead-rule run that ended without a verdict says next (the defaults survey
-#: of both models, bench/RESULTS.md, seventh session)
+#: what an adaptive bead-rule run that ended without a verdict says next (the defaults surveys
+#: of both models and both engines, bench/RESULTS.md, seventh to ninth sessions)
 BEAD_HINT = ("the bead rule's minima lie within tenths of a percent of each other (strands "
              "sink between each other's beads where they cross), so its independent searches "
-             "rarely meet: with the defaults (N = 150) 23 of the 35 prime knots through 8 "
-             "crossings converge. The tube model (--exclusion tube: a smooth tube of the same "
-             "diameter; its ε lies above the bead rule's) converges for 33 of 35. A verdict is "
-             "a statistical statement: another seed found a lower state for 9 of 39 bead-rule "
-             "verdicts (by 0.1-1.3 %) and 5 of 65 tube verdicts (8_13: 216.4 against 278.5); "
-             "another --seed checks it")
-#: what an unconverged bead-rule run of the annealing adds (bench/RESULTS.md, 2026-12-04)
-LANGEVIN_HINT = ("The Langevin schedule (--schedule langevin: every bead moves at every step) "
-                 "converges for 28 of the 35 in 12 min and ends lower than the annealing's "
-                 "searches on 11 of them (8_11: 210.2 against 251.0); 7 of its 28 verdicts lie "
-                 "above a state another search found")
+             "rarely meet: with the defaults (N = 150, the langevin schedule, up to 64 rounds) "
+             "33 of the 35 prime knots through 8 crossings converge. The tube model "
+             "(--exclusion tube: a smooth tube of the same diameter; its ε lies above the "
+             "bead rule's) converges for 33 of 35. A verdict is a statistical statement: "
+             "another seed found a lower state for 12 of 57 verdicts of the dynamics (by "
+             "0.15-12.7 %) and 5 of 65 tube verdicts (8_13: 216.4 against 278.5); another "
+             "--seed checks it")
+#: … and an unconverged run of the Monte Carlo (bench/RESULTS.md, eighth and ninth sessions)
+LANGEVIN_HINT = ("The Langevin dynamics (--schedule langevin, the default: every bead moves "
+                 "at every step) converges for 33 of the 35 and ends lower than the "
+                 "annealing's searches on 11 of them (8_11: 209.6 against 251.0)")
+#: … and an unconverged run of the dynamics (bench/RESULTS.md, eighth session)
+ANNEALING_HINT = ("The paper's Monte Carlo annealing (--schedule geometric) searches other "
+                  "funnels: it ends lower than the dynamics on knots of the 80 and CB "
+                  "families (6_3: 160.50 against 162.17; 7_3, 8_1, 8_17)")
+
+
+def pick_schedule(schedule: str, monte_carlo: list[str], rounds: int | None
+                  ) -> tuple[str, int, str]:
+    """The schedule ``--schedule`` runs, its rounds and a sentence saying what ran and why.
+
+    ``auto`` (the default) is the langevin schedule — the better search of the bead rule
+    (bench/RESULTS.md, ninth session: with its 64 rounds 33 of the 35 prime knots through 8
+    crossings converge, with the annealing's 8 rounds 23, in about the same time for the
+    35) — unless an option of the Monte Carlo is given (``monte_carlo``: the tube model,
+    checkpoints, the moves' parameters …), which then runs the paper's annealing
+    (geometric). ``rounds``
+    None: :data:`~stiffknots.problems.closed.LANGEVIN_ROUNDS` for langevin,
+    :data:`~stiffknots.problems.closed.DEFAULT_ROUNDS` for the others."""
+    from stiffknots.problems.closed import DEFAULT_ROUNDS, LANGEVIN_ROUNDS
+
+    if schedule == "auto" and not monte_carlo:
+        kind, note = "langevin", ("annealing by Langevin dynamics (--schedule auto: the bead "
+                                  "rule's default; the paper's Monte Carlo annealing, §VII: "
+                                  "--schedule geometric)")
+    elif schedule == "auto":
+        kind, note = "geometric", ("the paper's Monte Carlo annealing, §VII, geometric cooling "
+                                   f"(--schedule auto with {', '.join(monte_carlo)}: an option "
+                                   "of the Monte Carlo)")
+    else:
+        kind, note = schedule, _NOTES[schedule]
+    if rounds is None:
+        rounds = LANGEVIN_ROUNDS if kind == "langevin" else DEFAULT_ROUNDS
+    return kind, rounds, note
+
+
+#: what each schedule given by name runs (:func:`pick_schedule`)
+_NOTES = {"langevin": "annealing by Langevin dynamics (--schedule langevin)",
+          "geometric": "the paper's Monte Carlo annealing, §VII, geometric cooling "
+                       "(--schedule geometric)",
+          "power": "the paper's Monte Carlo annealing, §VII, power-law cooling "
+                   "(--schedule power)",
+          "tempering": "Monte Carlo replica exchange (--schedule tempering)"}
 
 
 def anneal(
@@ -75,15 +116,17 @@ def anneal(
         help="Number of beads N (bond length 1); default 150, or with --w-over-L the N rule "
              "(discretisation error below 0.1 %).", parser=count, show_default=False)] = None,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica (default: 15,000,000 at N = 150, scaled as N; "
-             "1.5e7 works too); with --schedule langevin, dynamics steps (default "
-             "1,000,000).", parser=count)] = None,
+        help="Per replica: dynamics steps of the langevin schedule (default 1,000,000 at "
+             "any N), attempted moves of the Monte Carlo schedules (default 15,000,000 at "
+             "N = 150, scaled as N); 1e6 works too.", parser=count)] = None,
     replicas: ReplicasOpt = 2,
-    rounds: Annotated[int, typer.Option(
+    rounds: Annotated[int | None, typer.Option(
         help="Most rounds of --replicas replicas: after each round the run stops if the "
              "lowest state (shape, ε within 0.1 %) was reached by 2 independent searches; "
-             "rounds after the second continue the lowest searches by basin hops while they "
-             "improve; 1 = a fixed budget.")] = 8,  # problems.closed.DEFAULT_ROUNDS
+             "with the Monte Carlo schedules rounds after the second continue the lowest "
+             "searches by basin hops while they improve; 1 = a fixed budget (default: 64 "
+             "with the langevin schedule, 8 with the others).",
+        show_default=False)] = None,
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(help="bead (paper, d=1/√2) or tube.")] = "bead",
     w: Annotated[float | None, typer.Option(help="Tube diameter (tube model; default 1/√2).")
@@ -93,9 +136,14 @@ def anneal(
                            "without --beads, N = ⌈(ε/(6·0.001))^½⌉ with ε the knot's upper "
                            "bound (discretisation error ≈ ε/(6N²) below 0.1 %).")] = None,
     schedule: Annotated[str, typer.Option(
-        help="geometric (default), power (the paper's power law; use it with --t-start 3e-2), "
-             "tempering (replica exchange) or langevin (guarded Langevin dynamics of the "
-             "whole chain, the peer LAMMPS's search; bead rule).")] = "geometric",
+        help="auto (default): langevin for the bead rule, geometric where a Monte Carlo "
+             "option is given (--exclusion tube, --w, --w-over-L, --tube-route, "
+             "--checkpoint, --relax-fraction, --delta, --m-max, --coarse); langevin "
+             "(annealing by guarded Langevin dynamics of the whole chain, the peer LAMMPS's "
+             "search; bead rule: 33 of the 35 prime knots through 8 crossings converge, the "
+             "Monte Carlo's 23); geometric (the paper's Monte Carlo annealing, §VII, "
+             "geometric cooling); power (the paper's power law; use it with --t-start "
+             "3e-2); tempering (replica exchange).")] = "auto",
     t_start: Annotated[float | None, typer.Option(
         help="Initial temperature (units of C) (default: 0.1).")] = None,
     t_end: Annotated[float | None, typer.Option(
@@ -103,8 +151,9 @@ def anneal(
     relax_fraction: Annotated[float | None, typer.Option(
         help="Fraction of the moves first relaxing the embedding at low T (default: 0.4; "
              "0 = plain annealing).")] = None,
-    delta: Annotated[float, typer.Option(help="Single-bead rotation angle (rad).",
-                                         show_default="π/100 ≈ 0.0314")] = math.pi / 100,
+    delta: Annotated[float | None, typer.Option(
+        help="Single-bead rotation angle (rad) of the Monte Carlo moves.",
+        show_default="π/100 ≈ 0.0314")] = None,
     m_max: Annotated[int | None, typer.Option(
         help="Largest sub-chain of a crankshaft move (default: N/2, a whole loop).")] = None,
     checkpoint: CheckpointOpt = None,
@@ -153,11 +202,17 @@ def anneal(
     beads = V.beads(150 if beads is None else beads)
     if moves is not None:
         moves = V.moves(moves)
-    rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)
     choice("--start", start, ("all", *STARTS))
     choice("--exclusion", exclusion, ("bead", "tube"))
-    choice("--schedule", schedule, SCHEDULES)
+    choice("--schedule", schedule, ("auto", *SCHEDULES))
     tube_only(w, exclusion)
+    monte_carlo = [opt for opt, given in (
+        ("--exclusion tube", exclusion == "tube"), ("--tube-route", tube_route),
+        ("--checkpoint", checkpoint is not None), ("--relax-fraction", relax_fraction is not None),
+        ("--delta", delta is not None), ("--m-max", m_max is not None),
+        ("--coarse", coarse is not None)) if given]
+    schedule, rounds, chosen = pick_schedule(schedule, monte_carlo, rounds)
+    rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)
     if schedule in ("tempering", "langevin") and relax_fraction is not None:
         raise UserError("--relax-fraction applies to the power and geometric schedules "
                         f"({schedule} has no relaxation stage)")
@@ -169,6 +224,9 @@ def anneal(
         if checkpoint is not None:
             raise UserError("--checkpoint applies to the Monte Carlo schedules (a langevin "
                             "replica takes seconds)")
+        if delta is not None or m_max is not None:
+            raise UserError("--delta and --m-max set the Monte Carlo moves; the langevin "
+                            "schedule has none (drop them, or give --schedule geometric)")
         if t_end is None:
             from stiffknots.engine.langevin import DEFAULT_T_END
 
@@ -179,7 +237,8 @@ def anneal(
     given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
     sch = replace(Schedule().for_beads(beads), kind=schedule,
                   **{k: v for k, v in given.items() if v is not None})
-    params = replace(MoveParams(), exclusion=exclusion, delta=delta,
+    params = replace(MoveParams(), exclusion=exclusion,
+                     **({} if delta is None else {"delta": delta}),
                      **({} if m_max is None else {"m_max": m_max}),
                      **({} if w is None else {"w": w}))
     if m_max is not None and not 1 <= m_max <= beads - 3:
@@ -242,6 +301,7 @@ def anneal(
     d["shape_reason"] = obs["shape_reason"]
     d["structure"] = obs.get("structure")
     d["width"] = width
+    d["schedule"], d["schedule_choice"], d["max_rounds"] = schedule, chosen, rounds
     if coarse_d is not None:
         d["coarse"] = coarse_d
     if checkpoint is not None:
@@ -288,6 +348,7 @@ def anneal(
                      "touch or nearly touch where they cross: the lowest chain that does)"),
                   markup=False, highlight=False)
     b = res.bounds
+    out.print(f"search: {chosen}", markup=False, highlight=False)
     out.print(f"shape of the best chain: {obs['label']}"
               + (f" (i = {obs['multiplicity']})" if obs["label"] == "CB" else "")
               + f" — {obs['shape_reason']}", markup=False, highlight=False)
@@ -301,7 +362,8 @@ def anneal(
                   "228.8 fresh, 163.9 from its N = 150 ground): try --coarse 150",
                   markup=False, highlight=False)
     if not res.converged and params.exclusion == "bead" and rounds > 1:
-        out.print(BEAD_HINT + (". " + LANGEVIN_HINT if schedule != "langevin" else ""),
+        out.print(BEAD_HINT + ". " + (ANNEALING_HINT if schedule == "langevin"
+                                      else LANGEVIN_HINT),
                   markup=False, highlight=False)
     below = (res.thin_limit.get("excess") or 0.0) < 0
     where = ("below the thin limit of its shape: the discretisation of N beads lowers ε more "

@@ -31,6 +31,12 @@ from stiffknots.problems.base import (
 )
 
 DEFAULT_ROUNDS = 8  # rounds of replicas until the lowest state is reached by two searches
+#: the rounds of a ``langevin`` schedule by default (``stiffknots anneal``): a replica of 10⁶
+#: dynamics steps costs about half an annealing replica (≈ 4.4 s at N = 150) and easy knots
+#: stop after a few rounds; through 8 crossings 8_7 and 8_2 converge after 34 and 51 rounds,
+#: and the 35 knots take about the annealing's time with its 8 rounds (≈ 29 min; a knot that
+#: never converges ≈ 4.5–5 min; bench/RESULTS.md, ninth session)
+LANGEVIN_ROUNDS = 64
 #: a continuation leg (rounds after the first two, :func:`stiffknots.problems.base.solve`):
 #: this many basin hops from the search's lowest chain …
 LEG_HOPS = 8
