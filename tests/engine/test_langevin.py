@@ -225,3 +225,19 @@ def test_replica_of_the_schedule_and_its_limits():
         run_langevin_replica(x, tube, seed=1)
     with pytest.raises(InvalidParameter, match="hops"):
         Schedule(kind="langevin", hops=2, hop_fraction=0.2).validate()
+
+
+def test_open_problems_refuse_the_schedule_before_any_worker():
+    """An open knot (either ensemble) with the langevin schedule is refused when the problem
+    is built, in the caller's process, not first inside a worker."""
+    from stiffknots.problems.open_extension import OpenExtension
+    from stiffknots.problems.open_force import OpenForce
+
+    sch = Schedule(kind="langevin", t_end=1e-4)
+    with pytest.raises(InvalidParameter, match="an open chain"):
+        OpenExtension("3_1", excess_length=40, moves=5_000, schedule=sch)
+    with pytest.raises(InvalidParameter, match="an open chain"):
+        OpenForce("3_1", force=1.0, moves=5_000, schedule=sch)
+    with pytest.raises(InvalidParameter, match="closed chains under the bead rule"):
+        AnnealSettings(moves=5_000, schedule=sch,
+                       params=MoveParams(energy="power", power=2)).validate()

@@ -81,6 +81,7 @@ from stiffknots.errors import (
     ChainGeometryError,
     CheckpointError,
     EnergyBookkeepingError,
+    InvalidParameter,
     RunStopped,
 )
 from stiffknots.fileio import atomic_path
@@ -154,6 +155,13 @@ class AnnealSettings:
             raise ValueError(f"powers must be integers ≥ 1, got {self.powers}")
         self.schedule.validate()
         self.ensemble.validate()
+        if self.schedule.kind == "langevin" and (not self.closed or self.plan != "anneal"
+                                                 or self.params.energy != "bending"):
+            # here, not first in the worker (run_langevin_replica checks it there too)
+            raise InvalidParameter(
+                "schedule", "langevin", "a Monte Carlo schedule for "
+                f"{'an open chain' if not self.closed else 'this problem'}: the langevin "
+                "schedule runs closed chains under the bead rule with the bending energy")
 
     def as_dict(self) -> dict:
         d = {
