@@ -94,3 +94,30 @@ def test_a_script_without_main_guard_is_told_why_its_workers_died(tmp_path):
     assert p.returncode != 0
     last = p.stderr.strip().splitlines()[-1]
     assert "WorkerError" in last and "my_study.py has no `if __name__" in last
+
+
+def test_a_closed_pool_survives_the_exit_wakeup_of_a_closing_pipe():
+    """At exit Python wakes every executor's manager thread without a lock, while the thread
+    may be closing that pipe; the pool's close makes that wake-up harmless. The race, made
+    certain: the pipe closed under a wake-up that has not seen it close (the unpatched
+    wake-up raises OSError here)."""
+    pool = WorkerPool(1).start()
+    ex = pool._ex  # noqa: SLF001 (the pool's executor)
+    wk = ex._executor_manager_thread_wakeup  # noqa: SLF001
+    pool.close()
+    writer = wk._writer  # noqa: SLF001
+    with pytest.raises(OSError):
+        type(wk).wakeup(type("W", (), {"_closed": False, "_writer": _closed_pipe()})())
+    wk._closed = False  # noqa: SLF001 (as the exit hook can find it mid-close)
+    wk._writer = _closed_pipe()  # noqa: SLF001
+    wk.wakeup()  # no exception
+    wk._writer, wk._closed = writer, True  # noqa: SLF001
+
+
+def _closed_pipe():
+    import multiprocessing as mp
+
+    r, w = mp.Pipe(duplex=False)
+    r.close()
+    w.close()
+    return w

@@ -279,9 +279,32 @@ def _unguarded_script_hint() -> str:
             "stiffknots that run replicas under that guard")
 
 
+def _quiet_wakeup(ex: ProcessPoolExecutor) -> None:
+    """Make the executor's wake-up of its manager thread safe against a closed pipe.
+
+    At interpreter exit ``concurrent.futures.process._python_exit`` wakes every manager
+    thread still registered, unlocked, while that thread may be closing the same pipe
+    (``_ThreadWakeup.wakeup`` checks ``_closed`` and then writes): on a loaded machine, a
+    usage error found just after the pool started ended with a "Bad file descriptor"
+    traceback after its one-line error (fresh clone, `make test`, 2026-12-04) although the
+    manager thread is joined below. A wake-up that finds the pipe closed has nothing left to
+    wake, so its OSError is dropped."""
+    wk = getattr(ex, "_executor_manager_thread_wakeup", None)
+    if wk is None or getattr(wk, "_quiet", False):
+        return
+    loud = wk.wakeup
+
+    def wakeup() -> None:
+        with contextlib.suppress(OSError, ValueError):
+            loud()
+
+    wk.wakeup, wk._quiet = wakeup, True
+
+
 def _terminate(ex: ProcessPoolExecutor) -> None:
     """Stop the pool now: cancel what has not started, kill the running workers."""
     procs = list(getattr(ex, "_processes", {}).values())
+    _quiet_wakeup(ex)
     ex.shutdown(wait=False, cancel_futures=True)
     for p in procs:
         with contextlib.suppress(Exception):
