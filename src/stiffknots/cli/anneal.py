@@ -59,9 +59,9 @@ BEAD_HINT = ("the bead rule's minima lie within tenths of a percent of each othe
              "33 of the 35 prime knots through 8 crossings converge. The tube model "
              "(--exclusion tube: a smooth tube of the same diameter; its ε lies above the "
              "bead rule's) converges for 33 of 35. A verdict is a statistical statement: "
-             "another seed found a lower state for 12 of 57 verdicts of the dynamics (by "
-             "0.15-12.7 %) and 5 of 65 tube verdicts (8_13: 216.4 against 278.5); another "
-             "--seed checks it")
+             "another seed found a lower state for 15 of 66 verdicts of the defaults (by "
+             "0.15-23 %: 7_7 233.97 against 189.92) and 5 of 65 tube verdicts (8_13: 216.4 "
+             "against 278.5); another --seed checks it")
 #: … and an unconverged run of the Monte Carlo (bench/RESULTS.md, eighth and ninth sessions)
 LANGEVIN_HINT = ("The Langevin dynamics (--schedule langevin, the default: every bead moves "
                  "at every step) converges for 33 of the 35 and ends lower than the "
