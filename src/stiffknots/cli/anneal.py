@@ -81,8 +81,7 @@ def pick_schedule(schedule: str, monte_carlo: list[str], rounds: int | None
     crossings converge, with the annealing's 8 rounds 23, in about the same time for the
     35) — unless an option of the Monte Carlo is given (``monte_carlo``: the tube model,
     checkpoints, the moves' parameters …), which then runs the paper's annealing
-    (geometric). ``rounds``
-    None: :data:`~stiffknots.problems.closed.LANGEVIN_ROUNDS` for langevin,
+    (geometric). ``rounds`` None: :data:`~stiffknots.problems.closed.LANGEVIN_ROUNDS` for langevin,
     :data:`~stiffknots.problems.closed.DEFAULT_ROUNDS` for the others."""
     from stiffknots.problems.closed import DEFAULT_ROUNDS, LANGEVIN_ROUNDS
 
@@ -207,7 +206,8 @@ def anneal(
     choice("--schedule", schedule, ("auto", *SCHEDULES))
     tube_only(w, exclusion)
     monte_carlo = [opt for opt, given in (
-        ("--exclusion tube", exclusion == "tube"), ("--tube-route", tube_route),
+        ("--w-over-L" if w_over_l is not None else "--exclusion tube", exclusion == "tube"),
+        ("--tube-route", tube_route),
         ("--checkpoint", checkpoint is not None), ("--relax-fraction", relax_fraction is not None),
         ("--delta", delta is not None), ("--m-max", m_max is not None),
         ("--coarse", coarse is not None)) if given]

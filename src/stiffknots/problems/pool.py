@@ -290,7 +290,7 @@ def _quiet_wakeup(ex: ProcessPoolExecutor) -> None:
     manager thread is joined below. A wake-up that finds the pipe closed has nothing left to
     wake, so its OSError is dropped."""
     wk = getattr(ex, "_executor_manager_thread_wakeup", None)
-    if wk is None or getattr(wk, "_quiet", False):
+    if wk is None:
         return
     loud = wk.wakeup
 
@@ -298,7 +298,7 @@ def _quiet_wakeup(ex: ProcessPoolExecutor) -> None:
         with contextlib.suppress(OSError, ValueError):
             loud()
 
-    wk.wakeup, wk._quiet = wakeup, True
+    wk.wakeup = wakeup
 
 
 def _terminate(ex: ProcessPoolExecutor) -> None:
