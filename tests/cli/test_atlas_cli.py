@@ -112,7 +112,7 @@ def test_atlas_json_shape(tmp_path):
     sw = d["sweep"]
     assert (sw["jobs"], sw["skipped"], sw["ran"], sw["failed"]) == (2, 0, 2, [])
     assert sw["budget"] == {"name": "tiny", "replicas": 2, "moves": 200_000,
-                           "max_replicas": 2, "legs": 0}
+                           "max_replicas": 2, "legs": 0, "bead_search": "annealing"}
     fam = d["families"]
     assert [r["label"] for r in fam["catalogue"]][:2] == ["n_c < 7", "n_c < 9"]
     assert fam["catalogue"][0]["fraction"] == 1.0

@@ -36,6 +36,11 @@ def test_budgets_are_documented_and_overridable():
     d, f = BUDGETS["default"], BUDGETS["full"]
     assert (d.replicas, d.moves, d.max_replicas) == (2, 15_000_000, 6)
     assert (f.replicas, f.moves, f.max_replicas) == (4, 60_000_000, 12)
+    # the bead rule's replicas: Langevin dynamics for default and full (bench/RESULTS.md,
+    # 2026-12-05), the annealing for the quick budgets
+    assert (d.bead_search, d.bead_steps, d.bead_max_replicas) == ("langevin", 1_000_000, 16)
+    assert (f.bead_search, f.bead_max_replicas) == ("langevin", 32)
+    assert BUDGETS["tiny"].bead_search == BUDGETS["small"].bead_search == "annealing"
     assert BUDGETS["small"].as_dict()["max_replicas"] == 2  # none added
     b = budget_of("small", replicas=3)
     assert (b.name, b.replicas, b.moves) == ("custom", 3, 5_000_000)
@@ -264,3 +269,37 @@ def test_unreachable_scheduler_is_a_user_error():
     for bad in ("", "not an address", "http//x"):
         with pytest.raises(UserInputError, match="--scheduler"):
             scheduler_address(bad)
+
+
+def test_a_langevin_bead_search_is_its_own_ensemble_and_leaves_the_tube_alone():
+    """bead_search = "langevin": the bead model's replicas are Langevin dynamics of
+    ``bead_steps`` steps (another settings hash: another ensemble), up to
+    ``bead_max_replicas``; the tube model's settings, hash and replica limit do not move."""
+    from stiffknots.sweeps.cluster import run_task
+
+    bead, tube = parse_models("bead,tube")
+    base = budget_of("default", bead_search="annealing")
+    lan = budget_of("default", bead_search="langevin")
+    assert lan is BUDGETS["default"] or lan == BUDGETS["default"]
+    assert (base.name, base.bead_search) == ("default", "annealing")
+    assert settings_hash(sweep_settings(tube, lan)) == settings_hash(sweep_settings(tube, base))
+    s = sweep_settings(bead, lan)
+    assert settings_hash(s) != settings_hash(sweep_settings(bead, base))
+    assert s["schedule"]["kind"] == "langevin" and s["moves"] == lan.bead_steps
+    assert lan.as_dict()["bead_search"] == "langevin"
+    assert base.as_dict()["bead_search"] == "annealing" and "bead_steps" not in base.as_dict()
+    more = replace(lan, bead_max_replicas=10)
+    assert (more.most_replicas(bead), more.most_replicas(tube)) == (10, base.max_replicas)
+    assert base.most_replicas(bead) == base.max_replicas
+    # a custom budget keeps the search; an unknown search is refused
+    assert budget_of("small", replicas=3, bead_search="langevin").bead_search == "langevin"
+    with pytest.raises(InvalidParameter, match="bead_search must be annealing or langevin"):
+        budget_of("tiny", bead_search="dynamics")
+    # the job a worker runs is the dynamics (short here), verified, with the key's settings
+    tiny = replace(budget_of("tiny", bead_search="langevin"), bead_steps=20_000)
+    (job, _) = plan_sweep(["3_1"], [bead], tiny, seed=1)
+    r = run_task(job, tiny)
+    assert r.knot_verified and r.langevin is not None
+    assert job.settings["schedule"]["kind"] == "langevin" and job.settings["moves"] == 20_000
+    x = np.asarray(r.coords)
+    assert np.allclose(np.linalg.norm(np.roll(x, -1, 0) - x, axis=1), 1.0, atol=1e-6)

@@ -228,9 +228,9 @@ def anneal(
             raise UserError("--delta and --m-max set the Monte Carlo moves; the langevin "
                             "schedule has none (drop them, or give --schedule geometric)")
         if t_end is None:
-            from stiffknots.engine.langevin import DEFAULT_T_END
+            from stiffknots.problems.closed import langevin_schedule
 
-            t_end = DEFAULT_T_END * (150 / beads) ** 2
+            t_end = langevin_schedule(beads).t_end
             if t_start is not None and t_end >= t_start:
                 raise UserError(f"--t-start must lie above the langevin schedule's final "
                                 f"temperature {t_end:g} (or give --t-end), got {t_start:g}")

@@ -25,6 +25,7 @@ from stiffknots.cli.app import (
     JsonOpt,
     SeedOpt,
     UserError,
+    choice,
     count,
     dump,
     err,
@@ -183,7 +184,9 @@ def atlas(
     budget: Annotated[str, typer.Option(
         help="Replicas × moves per knot and model: tiny (2 × 0.2 M, a smoke test), small "
              "(2 × 5 M), default (2 × 15 M, up to 6 replicas until converged, then up to 2 "
-             "continuation legs for the tube model) or full (4 × 60 M, up to 12, 2 legs).")
+             "continuation legs for the tube model; the bead model's replicas Langevin "
+             "dynamics of 10⁶ steps, up to 16) or full (4 × 60 M, up to 12, 2 legs; bead "
+             "Langevin up to 32).")
     ] = "default",
     out_dir: Annotated[str, typer.Option(
         "--out", help="Folder of the atlas pages.")] = "results/atlas",
@@ -200,13 +203,20 @@ def atlas(
     replicas: Annotated[int | None, typer.Option(
         help="Replicas per knot and model instead of the budget's.", parser=count)] = None,
     moves: Annotated[int | None, typer.Option(
-        help="Attempted moves per replica instead of the budget's (3e7 works too).",
+        help="Attempted moves per annealing replica instead of the budget's (3e7 works "
+             "too); a Langevin bead replica keeps its 10⁶ steps.",
         parser=count)] = None,
     max_replicas: Annotated[int | None, typer.Option(
         help="Add replicas, 2 at a time, to every knot and model whose ground state has not "
-             "converged, up to this many in all (default: the budget's: 6 for default, 12 for "
-             "full, none added for tiny and small).",
+             "converged, up to this many in all, every model (default: the budget's: 6 for "
+             "default, 12 for full, the Langevin bead model 16 and 32; none added for tiny "
+             "and small, nor with --replicas or --moves).",
         parser=count)] = None,
+    bead_search: Annotated[str | None, typer.Option(
+        help="How the bead model's replicas search: annealing (the paper's Monte Carlo, "
+             "--moves moves) or langevin (Langevin dynamics of 10⁶ steps, every bead moving "
+             "at once, as anneal's default). Default: the budget's (langevin for default "
+             "and full, annealing for tiny and small).")] = None,
     seed: SeedOpt = 0,
     stored: Annotated[bool, typer.Option(
         "--stored", help="Run nothing: write the pages from the replicas already in --db "
@@ -231,7 +241,13 @@ def atlas(
     mods = parse_models(models, w=w)
     if w is not None and "tube" not in [m.name for m in mods]:
         raise UserError("--w is the tube diameter: add tube to --models")
-    bud = budget_of(budget, replicas=replicas, moves=moves)
+    if bead_search is not None:
+        from stiffknots.sweeps.budgets import BEAD_SEARCHES
+
+        choice("--bead-search", bead_search, BEAD_SEARCHES)
+        if "bead" not in [m.name for m in mods]:
+            raise UserError("--bead-search sets the bead model's search: add bead to --models")
+    bud = budget_of(budget, replicas=replicas, moves=moves, bead_search=bead_search)
     V.seed(seed)
     if max_replicas is not None:  # None: the budget's (run_sweep)
         V.integer("max_replicas", max_replicas, bud.replicas, V.MAX_REPLICAS)

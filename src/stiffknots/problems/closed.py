@@ -37,6 +37,20 @@ DEFAULT_ROUNDS = 8  # rounds of replicas until the lowest state is reached by tw
 #: and the 35 knots take about the annealing's time with its 8 rounds (≈ 29 min; a knot that
 #: never converges ≈ 4.5–5 min; bench/RESULTS.md, ninth session)
 LANGEVIN_ROUNDS = 64
+
+
+def langevin_schedule(beads: int) -> Schedule:
+    """The langevin schedule of ``stiffknots anneal`` and of the atlas's Langevin bead
+    ensembles at ``beads`` beads: the default schedule sized for N with ``kind = "langevin"``
+    and the final temperature :data:`~stiffknots.engine.langevin.DEFAULT_T_END` scaled as
+    (150/N)² (the bending energy's scale per bond)."""
+    from dataclasses import replace
+
+    from stiffknots.engine.langevin import DEFAULT_T_END
+
+    return replace(Schedule().for_beads(beads), kind="langevin",
+                   t_end=DEFAULT_T_END * (150 / beads) ** 2)
+
 #: a continuation leg (rounds after the first two, :func:`stiffknots.problems.base.solve`):
 #: this many basin hops from the search's lowest chain …
 LEG_HOPS = 8

@@ -377,6 +377,23 @@ def _plot_eps_n2(study: Mapping, path: Path) -> Path | None:
     return save_figure(ax, path)
 
 
+def budget_text(budget: Budget, models: Sequence[Model], max_replicas: int | None = None
+                ) -> str:
+    """The budget in one line, per model: its replicas and their moves (or dynamics steps),
+    and the most replicas it may get (``max_replicas``: the sweep's override), e.g.
+    ``default: bead 2 × Langevin dynamics of 1,000,000 steps, up to 12 until converged; tube
+    2 × 15,000,000 moves, up to 6 until converged``."""
+    parts = []
+    for m in models:
+        moves, _ = budget.search_of(m)
+        top = budget.most_replicas(m) if max_replicas is None else max_replicas
+        what = (f"Langevin dynamics of {moves:,} steps" if budget.langevin(m)
+                else f"{moves:,} moves")
+        parts.append(f"{m.name} {budget.replicas} × {what}"
+                     + (f", up to {top} until converged" if top > budget.replicas else ""))
+    return f"{budget.name}: " + "; ".join(parts)
+
+
 def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
               db: str | Path = DEFAULT_DB, out: str | Path = DEFAULT_OUT, seed: int = 0,
               scheduler: str | None = None, workers: int | None = None,
@@ -437,10 +454,7 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
         width = next(m.width()["text"] for m in models if m.name == main)
         grounds = {e["name"]: e["models"][main]["ground"] for e in entries}
         study = family_study(grounds, model=main, width=width)
-        more = (f", up to {sweep.max_replicas} until converged"
-                if sweep.max_replicas > budget.replicas else "")
-        meta = {"budget": f"{budget.name}: {budget.replicas} replicas × {budget.moves:,} moves"
-                          + more,
+        meta = {"budget": budget_text(budget, models, max_replicas),
                 "seed": seed, "models": "; ".join(m.width()["text"] for m in models),
                 "database": str(db), "converged": CONVERGENCE_RULE,
                 "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),

@@ -1,35 +1,47 @@
 """Budgets of a sweep: how many replicas of how many attempted moves each (knot, model) gets.
 
-A budget is a name for (replicas, moves per replica, most replicas); every replica runs the
-default annealing schedule of :class:`~stiffknots.engine.driver.AnnealSettings` (relaxation,
-then geometric annealing from T = 0.1, §VII) on those moves and is polished. The moves are
-part of every replica's settings, hence of its store key: two budgets never share results,
-while a budget with more replicas of the same moves reuses the replicas a smaller one stored
-(replica r's seed does not depend on the number of replicas). A (knot, model) whose ground
-state has not converged once its replicas have ended gets two more, up to ``max_replicas``
-(:func:`stiffknots.sweeps.run.run_sweep`): easy knots stop at two, hard ones get more; a tube
-ensemble still not converged then gets up to ``legs`` continuation legs, each continuing its
-second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
+A budget is a name for (replicas, moves per replica, most replicas) and for how the bead-rule
+ensembles search. A tube replica — and a bead-rule replica of ``bead_search = "annealing"`` —
+runs the default annealing schedule of :class:`~stiffknots.engine.driver.AnnealSettings`
+(relaxation, then geometric annealing from T = 0.1, §VII) on those moves; a bead-rule replica
+of ``bead_search = "langevin"`` runs ``bead_steps`` steps of the guarded Langevin dynamics
+(:mod:`stiffknots.engine.langevin`, ``anneal``'s default search of the bead rule). Every replica
+is polished. The moves and the search are part of every replica's settings, hence of its
+store key: two budgets with other moves never share results, while a budget with more
+replicas of the same settings reuses the replicas a smaller one stored (replica r's seed does
+not depend on the number of replicas). A (knot, model) whose ground state has not converged
+once its replicas have ended gets two more, up to ``max_replicas`` (a Langevin bead ensemble:
+``bead_max_replicas``; :func:`stiffknots.sweeps.run.run_sweep`): easy knots stop at two, hard
+ones get more; a tube ensemble still not converged then gets up to ``legs`` continuation
+legs, each continuing its second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
 
-=========  ========  ============  ============  ====  ====================================
-budget     replicas  moves         most          legs  CPU seconds per (knot, model), N = 150
-=========  ========  ============  ============  ====  ====================================
-tiny       2         200,000       2             0     ≈ 1 — a smoke test of the machinery
-small      2         5,000,000     2             0     ≈ 10
-default    2         15,000,000    6             2     ≈ 20 converged at 2, ≈ 60 at 6 replicas
-                                                       (a tube leg: ≈ 10–45 more)
-full       4         60,000,000    12            2     ≈ 160 at 4 replicas, ≈ 480 at 12
-=========  ========  ============  ============  ====  ====================================
+=========  ========  ==========  ====  ====  =====================  ========================
+budget     replicas  moves       most  legs  bead rule              CPU s per (knot, model)
+=========  ========  ==========  ====  ====  =====================  ========================
+tiny       2         200,000     2     0     annealing              ≈ 1 — a smoke test
+small      2         5,000,000   2     0     annealing              ≈ 10
+default    2         15,000,000  6     2     Langevin 10⁶ steps,    tube ≈ 20 converged at 2,
+                                             up to 16               ≈ 60 at 6 (a leg ≈ 10–45);
+                                                                    bead ≈ 4 a replica
+full       4         60,000,000  12    2     Langevin 10⁶ steps,    tube ≈ 160 at 4, ≈ 480 at
+                                             up to 32               12; bead ≈ 4 a replica
+=========  ========  ==========  ====  ====  =====================  ========================
 
-Measurements behind the default row (2026-11-29, ``bench/defaults_survey.py``: the same
+Why the Langevin bead search (2026-12-05, tenth session; bench/RESULTS.md): on 18 knots of 9
+and 10 crossings (9_1, 9_7, …, 9_49, 10_1, 10_21, …, 10_161; both models, seed 0) the
+annealing's bead ensembles (2 × 15 M moves, up to 6) converged 6 of 18 for 800 own CPU s,
+the Langevin ones (up to 16 replicas of 10⁶ steps, 4.0 CPU s each) 13 of 18 for 607 CPU s,
+with lower grounds for 10 knots and higher ones for 4; capped at 6 replicas they would have
+converged 10 for 323 CPU s. Both searches left two verdicts above the other's lowest state.
+The tube ensembles' settings, and so their stored replicas, are the same under both.
+
+Measurements behind the tube rows (2026-11-29, ``bench/defaults_survey.py``: the same
 replicas — 15 M moves, polished — through ``stiffknots anneal``, 35 knots through 8
-crossings, bead rule): 7–13 CPU seconds per replica; about half the knots converge with
-their first two replicas. A sweep of every prime knot through 10 crossings under both models
-(498 (knot, model) pairs) on 2 free cores then takes about 3 h on ``default`` (projected from
-10_1 … 10_8: 351 s, 2026-12-03, with every tube replica seeding a bead replica, which spares
-the bead ensembles most added replicas; the 249-knot run has not been made in one piece on
-this machine: the README says what has been run), 45 min on ``small``. Before 2026-11-29
-``default`` was 4 × 30 M moves of the uniform-length crankshafts (≈ 76 CPU s per pair, 5.3 h).
+crossings): 7–13 CPU seconds per replica; about half the knots converge with their first two
+replicas. The 249-knot atlas (498 (knot, model) pairs) with the annealing's bead ensembles
+took 4.56 h on two cores (bench/RESULTS.md, 2026-12-03, fifth session); the README says what
+the current default takes. Before 2026-11-29 ``default`` was 4 × 30 M moves of the
+uniform-length crankshafts (≈ 76 CPU s per pair, 5.3 h).
 """
 
 from __future__ import annotations
@@ -39,7 +51,13 @@ from dataclasses import dataclass
 from stiffknots.errors import InvalidParameter
 from stiffknots.problems import validate as V
 
-__all__ = ["Budget", "BUDGETS", "budget_of", "MEASURED_CPU_SECONDS_PER_M_MOVES"]
+__all__ = ["Budget", "BUDGETS", "BEAD_SEARCHES", "budget_of", "MEASURED_CPU_SECONDS_PER_M_MOVES"]
+
+#: How a bead-rule ensemble searches: ``annealing`` — the paper's Monte Carlo annealing (§VII)
+#: of ``moves`` moves a replica, the tube model's search too — or ``langevin`` — the guarded
+#: Langevin dynamics of :mod:`stiffknots.engine.langevin` (every bead moves at every step;
+#: ``anneal``'s default for the bead rule) of ``bead_steps`` steps a replica.
+BEAD_SEARCHES = ("annealing", "langevin")
 
 #: CPU seconds per million attempted moves of one replica at N = 150 under the default
 #: schedule, its polish included: 7–13 CPU s per 15 M-move replica over the knots through 8
@@ -65,6 +83,14 @@ class Budget:
     legs : int
         Then, while it has not converged, up to this many continuation legs, one at a time,
         each continuing the second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
+    bead_search : str
+        How the bead-rule ensembles search (:data:`BEAD_SEARCHES`); the tube model always
+        anneals.
+    bead_steps : int
+        Dynamics steps of a bead-rule replica with ``bead_search = "langevin"``.
+    bead_max_replicas : int or None
+        The most replicas of a bead-rule ensemble with ``bead_search = "langevin"`` (None:
+        ``max_replicas``): its replicas cost about half an annealing replica.
     """
 
     name: str
@@ -72,13 +98,44 @@ class Budget:
     moves: int
     max_replicas: int | None = None
     legs: int = 0
+    bead_search: str = "annealing"
+    bead_steps: int = 1_000_000
+    bead_max_replicas: int | None = None
 
     def validate(self) -> Budget:
         """Return self, or raise :class:`InvalidParameter` for a bad count (the limits of
-        :mod:`stiffknots.problems.validate`)."""
+        :mod:`stiffknots.problems.validate`) or an unknown bead search."""
         V.replicas(self.replicas)
         V.moves(self.moves)
+        if self.bead_search not in BEAD_SEARCHES:
+            raise InvalidParameter("bead_search", self.bead_search,
+                                   " or ".join(BEAD_SEARCHES))
+        V.moves(self.bead_steps)
         return self
+
+    def langevin(self, model) -> bool:
+        """Whether ``model``'s replicas run the Langevin dynamics (bead rule, ``bead_search =
+        "langevin"``)."""
+        return model.exclusion == "bead" and self.bead_search == "langevin"
+
+    def search_of(self, model) -> tuple[int, object]:
+        """(moves, :class:`~stiffknots.engine.schedules.Schedule`) of every replica of
+        ``model``: the dynamics steps and the langevin schedule
+        (:func:`stiffknots.problems.closed.langevin_schedule`) where :meth:`langevin`, else
+        ``moves`` and the default annealing schedule sized for N."""
+        from stiffknots.engine.schedules import Schedule
+        from stiffknots.problems.closed import langevin_schedule
+
+        if self.langevin(model):
+            return self.bead_steps, langevin_schedule(model.beads)
+        return self.moves, Schedule().for_beads(model.beads)
+
+    def most_replicas(self, model) -> int:
+        """The most replicas of one ``model`` ensemble (``bead_max_replicas`` for a Langevin
+        bead ensemble where set, else ``max_replicas``, else ``replicas``)."""
+        if self.langevin(model) and self.bead_max_replicas:
+            return self.bead_max_replicas
+        return self.max_replicas or self.replicas
 
     def cpu_seconds(self) -> float:
         """Estimated CPU seconds of one (knot, model) on one core (N = 150)."""
@@ -86,30 +143,43 @@ class Budget:
 
     def as_dict(self) -> dict:
         return {"name": self.name, "replicas": self.replicas, "moves": self.moves,
-                "max_replicas": self.max_replicas or self.replicas, "legs": self.legs}
+                "max_replicas": self.max_replicas or self.replicas, "legs": self.legs,
+                "bead_search": self.bead_search,
+                **({"bead_steps": self.bead_steps,
+                    "bead_max_replicas": self.bead_max_replicas or self.max_replicas
+                    or self.replicas} if self.bead_search == "langevin" else {})}
 
 
 BUDGETS: dict[str, Budget] = {
     "tiny": Budget("tiny", 2, 200_000),
     "small": Budget("small", 2, 5_000_000),
-    "default": Budget("default", 2, 15_000_000, max_replicas=6, legs=2),
-    "full": Budget("full", 4, 60_000_000, max_replicas=12, legs=2),
+    "default": Budget("default", 2, 15_000_000, max_replicas=6, legs=2,
+                      bead_search="langevin", bead_max_replicas=16),
+    "full": Budget("full", 4, 60_000_000, max_replicas=12, legs=2,
+                   bead_search="langevin", bead_max_replicas=32),
 }
 
 
-def budget_of(name: str, *, replicas: int | None = None, moves: int | None = None) -> Budget:
+def budget_of(name: str, *, replicas: int | None = None, moves: int | None = None,
+              bead_search: str | None = None) -> Budget:
     """The named budget, with ``replicas`` or ``moves`` overridden where given (the name then
-    becomes ``custom``).
+    becomes ``custom``, with no replicas added and no legs), and its bead-rule search where
+    ``bead_search`` is given (:data:`BEAD_SEARCHES`; the name stays).
 
     Raises
     ------
     InvalidParameter
-        An unknown name (the message lists the budgets) or a bad count.
+        An unknown name (the message lists the budgets), a bad count, an unknown search.
     """
+    from dataclasses import replace
+
     if name not in BUDGETS:
         raise InvalidParameter("budget", name, "one of " + ", ".join(BUDGETS))
     b = BUDGETS[name]
+    if bead_search is not None:
+        b = replace(b, bead_search=bead_search).validate()
     if replicas is None and moves is None:
         return b
-    return Budget("custom", b.replicas if replicas is None else replicas,
-                  b.moves if moves is None else moves).validate()
+    return replace(b, name="custom", replicas=b.replicas if replicas is None else replicas,
+                   moves=b.moves if moves is None else moves, max_replicas=None, legs=0,
+                   bead_max_replicas=None).validate()

@@ -37,7 +37,7 @@ from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job
 from stiffknots.store import ReplicaKey, Store, canonical_json, settings_hash
 from stiffknots.sweeps.budgets import Budget
-from stiffknots.sweeps.models import Model, for_beads
+from stiffknots.sweeps.models import Model
 
 __all__ = ["PROBLEM", "START_POLICY", "FAVOUR_FROM", "SweepJob", "sweep_settings",
            "resolve_knots", "plan_sweep", "pending", "sweep_starts", "favoured_start",
@@ -55,14 +55,14 @@ FAVOUR_FROM = 3
 
 def sweep_settings(model: Model, budget: Budget) -> dict[str, Any]:
     """The settings of every replica of ``model`` under ``budget`` (the input of the key's
-    settings hash): ``AnnealSettings(moves, schedule, params=model.params()).as_dict()`` —
+    settings hash): ``AnnealSettings(moves, schedule, params=model.params()).as_dict()``, the
+    moves and schedule of :meth:`Budget.search_of <stiffknots.sweeps.budgets.Budget.search_of>`
+    (the annealing, or the Langevin dynamics of a Langevin bead ensemble) —
     built as ClosedAnneal builds them, which :func:`build_jobs` checks — plus
     ``problem`` and ``start`` (:func:`stiffknots.store.keys.settings_hash` says what belongs
     there)."""
-    from stiffknots.engine.schedules import Schedule
-
-    s = AnnealSettings(moves=budget.moves, schedule=for_beads(Schedule(), model.beads),
-                       params=model.params())
+    moves, schedule = budget.search_of(model)
+    s = AnnealSettings(moves=moves, schedule=schedule, params=model.params())
     s.validate()
     # every replica is polished to its local minimum (problems.base.polish_run)
     return {**s.as_dict(), "problem": PROBLEM, "start": START_POLICY, "polish": True}
@@ -269,7 +269,8 @@ def build_problem(knot: str, model: Model, budget: Budget, seed: int,
             raise RuntimeError(f"{knot} has no start {start!r} in a sweep; this is a bug in "
                                "stiffknots, please report it")
         starts = [start] * budget.replicas
-    problem = ClosedAnneal(k.name, beads=model.beads, moves=budget.moves,
+    moves, schedule = budget.search_of(model)
+    problem = ClosedAnneal(k.name, beads=model.beads, moves=moves, schedule=schedule,
                            replicas=budget.replicas, seed=seed, params=model.params(),
                            start=starts, rounds=1, polish=settings.get("polish", True),
                            tube_route=False)  # a sweep seeds its bead ensembles instead

@@ -290,7 +290,9 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         Replicas are added, ``step`` at a time, to every (knot, model) not converged once its
         replicas have ended (:func:`ensemble_converged`: the ground state's rule, and a
         replica from every default start), up to ``max_replicas`` in all.
-        Default: the budget's ``max_replicas`` (its replicas when None: nothing added). The
+        Default: per model, the budget's (:meth:`Budget.most_replicas
+        <stiffknots.sweeps.budgets.Budget.most_replicas>`; its replicas when None: nothing
+        added). The
         added replicas have the budget's moves and settings: they join the same ensemble, and
         a resumed sweep skips them too.
     step : int
@@ -319,8 +321,13 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         local_workers(workers)
     else:
         scheduler_address(scheduler)
-    max_r = (budget.max_replicas or budget.replicas) if max_replicas is None else V.integer(
-        "max_replicas", max_replicas, budget.replicas, V.MAX_REPLICAS)
+    if max_replicas is not None:
+        max_replicas = V.integer("max_replicas", max_replicas, budget.replicas,
+                                 V.MAX_REPLICAS)
+    #: model name → the most replicas of its ensembles
+    most = {m.name: (budget.most_replicas(m) if max_replicas is None else max_replicas)
+            for m in models}
+    max_r = max(most.values(), default=budget.replicas)
     step = V.integer("step", step, 1, V.MAX_REPLICAS)
     jobs = plan_sweep(knots, models, budget, seed)
     res = SweepResult(list(knots), list(models), budget, int(seed),
@@ -359,9 +366,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
 
     def extend(g: dict) -> list[SweepJob]:
         """The replicas to add to a (knot, model) whose replicas have all ended."""
-        while g["replicas"] < max_r and not ensemble_converged(
+        top = most[g["model"].name]
+        while g["replicas"] < top and not ensemble_converged(
                 store, g["knot"], g["model"], res.settings_hash[g["model"].name]):
-            n = min(max_r, g["replicas"] + step)
+            n = min(top, g["replicas"] + step)
             more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
                               seed)[g["replicas"]:]
             more = [replace(j, start=favoured_start(store, j, g["replicas"])) for j in more]
