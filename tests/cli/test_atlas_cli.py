@@ -137,6 +137,12 @@ def test_atlas_json_shape(tmp_path):
     assert d3["knots"][1]["models"]["bead"]["ground"] is None
     assert (out / "knots" / "4_1.html").exists()
     assert d3["converged"]["bead"] == float(k["converged"])  # over the knots with results
+    # the knots not converged are listed (the target: "list the others"), 4_1 — no
+    # results — is not among them
+    assert d3["converged_counts"]["bead"]["not_converged"] == ([] if k["converged"] else ["3_1"])
+    page = (out / "index.html").read_text()
+    assert "not converged" in page and ("bead none of 1" if k["converged"]
+                                        else "bead 1 of 1: 3_1") in page
     with Store(db, create=False) as st:
         assert st.count() == 2
     rc, text, err = cli("atlas", "--knots", "3_1,4_1", "--models", "bead", "--budget", "tiny",
@@ -144,6 +150,7 @@ def test_atlas_json_shape(tmp_path):
     assert rc == 0, err
     flat = " ".join(text.split())
     assert "2 not run" in flat and f"bead {int(k['converged'])} of 1" in flat, flat
+    assert ("not converged: bead 1 of 1: 3_1" in flat) == (not k["converged"]), flat
 
 
 def test_atlas_stored_on_an_empty_database(tmp_path):

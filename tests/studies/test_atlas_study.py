@@ -304,3 +304,25 @@ def test_structure_groups_largest_first_and_skip_missing():
         ("2 line-braids (m = 2) + double point", 1, ["7_4"])]
     assert g[0]["shapes"] == {"other": 1, "CB(i=3)": 1}
     assert g[0]["epsilon"] == [183.5, 249.2]
+
+
+def test_converged_counts_list_the_knots_not_converged():
+    """Per model: the counts over the knots with results, and the others by name, in order."""
+    from stiffknots.studies.atlas import converged_counts, not_converged_text
+    from stiffknots.sweeps import parse_models
+
+    models = parse_models("bead,tube")
+
+    def entry(name, bead, tube):
+        return {"name": name, "models": {
+            "bead": {"ground": None if bead is None else {"epsilon": 1.0}, "converged": bead},
+            "tube": {"ground": None if tube is None else {"epsilon": 1.0}, "converged": tube}}}
+
+    entries = [entry("3_1", True, True), entry("7_4", False, True), entry("10_1", False, None),
+               entry("10_2", None, None)]
+    c = converged_counts(entries, models)
+    assert c == {"bead": {"converged": 1, "knots": 3, "not_converged": ["7_4", "10_1"]},
+                 "tube": {"converged": 2, "knots": 2, "not_converged": []}}
+    assert not_converged_text(c) == "bead 2 of 3: 7_4, 10_1; tube none of 2"
+    assert not_converged_text(converged_counts([entry("10_2", None, None)], models)) == (
+        "no results stored yet")

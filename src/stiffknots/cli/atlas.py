@@ -286,6 +286,8 @@ def atlas(
 
 
 def _print(d: dict, mods) -> None:
+    from stiffknots.studies.atlas import not_converged_text
+
     sw = d["sweep"]
     t = Table(title=f"{len(d['knots'])} knots — {', '.join(m.width()['text'] for m in mods)}",
               caption="ground state and ε; ✓ converged, · not; +k metastable states")
@@ -326,6 +328,9 @@ def _print(d: dict, mods) -> None:
                      for k, c in d["converged_counts"].items() if c["knots"])
     out.print(f"converged ({fam['rule']}): {conv or 'no results stored yet'}", highlight=False,
               markup=False)
+    if any(c["not_converged"] for c in d["converged_counts"].values()):
+        out.print(f"not converged: {not_converged_text(d['converged_counts'])}",
+                  highlight=False, markup=False, soft_wrap=True)
     missed = [e for e in d["knots"] if e.get("bead_above_tube")]
     if missed:
         out.print("bead-rule ground above the tube's (a tube chain of the same width is "

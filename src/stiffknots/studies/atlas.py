@@ -52,7 +52,7 @@ from stiffknots.sweeps import (
 
 __all__ = ["DEFAULT_OUT", "DEFAULT_DB", "bead_above_tube", "knot_records", "atlas_input",
            "json_entry", "family_study", "families_table", "eps_n2_points", "run_atlas",
-           "structure_groups"]
+           "structure_groups", "converged_counts", "not_converged_text"]
 
 #: Where the pages go by default.
 DEFAULT_OUT = Path("results") / "atlas"
@@ -394,6 +394,30 @@ def budget_text(budget: Budget, models: Sequence[Model], max_replicas: int | Non
     return f"{budget.name}: " + "; ".join(parts)
 
 
+def converged_counts(entries: Sequence[Mapping], models: Sequence[Model]) -> dict[str, dict]:
+    """Per model, over the knots with results in it (a part-way atlas has others): how many
+    ground states converged (:mod:`stiffknots.sweeps.convergence`), of how many knots, and the
+    knots whose did not, in catalogue order — the list the issue's 90 % target asks for.
+
+    ``entries`` are :func:`json_entry` dicts."""
+    counts = {}
+    for m in models:
+        done = [e for e in entries if e["models"][m.name]["ground"]]
+        counts[m.name] = {
+            "converged": sum(1 for e in done if e["models"][m.name]["converged"]),
+            "knots": len(done),
+            "not_converged": [e["name"] for e in done if not e["models"][m.name]["converged"]]}
+    return counts
+
+
+def not_converged_text(counts: Mapping[str, Mapping]) -> str:
+    """:func:`converged_counts` in one line, e.g. ``bead 2 of 8: 7_4, 10_1; tube none of 8``."""
+    return "; ".join(
+        f"{name} {len(c['not_converged']) or 'none'} of {c['knots']}"
+        + (f": {', '.join(c['not_converged'])}" if c["not_converged"] else "")
+        for name, c in counts.items() if c["knots"]) or "no results stored yet"
+
+
 def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
               db: str | Path = DEFAULT_DB, out: str | Path = DEFAULT_OUT, seed: int = 0,
               scheduler: str | None = None, workers: int | None = None,
@@ -433,7 +457,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
         (:meth:`SweepResult.to_dict`), ``knots`` (:func:`json_entry` per knot),
         ``families`` (:func:`family_study`), ``converged`` (model → the fraction of the
         knots with results in the model whose ground state converged), ``converged_counts``
-        (model → ``{"converged", "knots"}``, the same as counts), ``files``.
+        (model → ``{"converged", "knots", "not_converged"}``: the counts, and the knots with
+        results whose ground state did not converge, :func:`converged_counts`), ``files``.
     """
     from stiffknots.report.atlas import write_atlas
 
@@ -454,9 +479,11 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
         width = next(m.width()["text"] for m in models if m.name == main)
         grounds = {e["name"]: e["models"][main]["ground"] for e in entries}
         study = family_study(grounds, model=main, width=width)
+        counts = converged_counts(entries, models)
         meta = {"budget": budget_text(budget, models, max_replicas),
                 "seed": seed, "models": "; ".join(m.width()["text"] for m in models),
                 "database": str(db), "converged": CONVERGENCE_RULE,
+                "not converged": not_converged_text(counts),
                 "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                 **({"command": command} if command else {})}
         html = write_atlas(out, [atlas_input(store, r) for r in recs],
@@ -469,11 +496,6 @@ def run_atlas(knots: Sequence[str], models: Sequence[Model], budget: Budget, *,
     files["families"] = str(write_json(out / "families.json", {
         "version": __version__, "seed": seed, "budget": budget.as_dict(),
         "settings": {m.name: sweep_settings(m, budget) for m in models}, **study}))
-    counts = {}  # over the knots with results in the model (a part-way atlas has others)
-    for m in models:
-        done = [e for e in entries if e["models"][m.name]["ground"]]
-        counts[m.name] = {"converged": sum(1 for e in done if e["models"][m.name]["converged"]),
-                          "knots": len(done)}
     converged = {k: (c["converged"] / c["knots"] if c["knots"] else None)
                  for k, c in counts.items()}
     result.update({"html": str(html), "knots": entries, "families": study,
