@@ -25,13 +25,13 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import sqlite3
 import sys
 import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
 
+from atlas_replay import capped_copy  # bench/, beside this script
 from stiffknots.store import settings_hash
 from stiffknots.store.keys import knot_sort_key
 from stiffknots.store.sqlite import Store
@@ -90,13 +90,7 @@ def compare(db: str, hashes: dict[str, str], replay: list[int]) -> dict:
     out["replay"] = []
     for cap in replay:
         with tempfile.TemporaryDirectory() as tmp:
-            copy = str(Path(tmp) / "replay.db")
-            with sqlite3.connect(db) as src, sqlite3.connect(copy) as dst:
-                src.backup(dst)
-            with sqlite3.connect(copy) as con:
-                con.execute("DELETE FROM replicas WHERE exclusion = 'bead' AND replica >= ? "
-                            "AND replica < ?", (cap, OLDER_SEEDED_REPLICA))
-            s2 = Store(copy, create=False)
+            s2 = Store(capped_copy(db, tmp, cap), create=False)
             for name, h in hashes.items():
                 g = s2.ground_states(settings_hash=h, structure=False)
                 cpu = sum(r["cpu_seconds"] or 0 for r in s2.replicas(settings_hash=h)

@@ -39,10 +39,10 @@ from pathlib import Path
 
 from stiffknots.store.sqlite import Store
 from stiffknots.sweeps.convergence import ensemble_converged
-from stiffknots.sweeps.cross import SEEDED_REPLICA
+from stiffknots.sweeps.cross import OLDER_SEEDED_REPLICA, SEEDED_REPLICA
 from stiffknots.sweeps.legs import LEG_REPLICA
 
-FRESH_BELOW = 1_000_000  # the replicas of a model's own fresh searches
+FRESH_BELOW = OLDER_SEEDED_REPLICA  # below it: the replicas of a model's own searches
 
 
 def _ints(s: str) -> list[int]:
@@ -70,15 +70,23 @@ def verdicts(path: str) -> dict:
     return out
 
 
+def capped_copy(db: str, folder: str, bead_cap: int) -> str:
+    """A copy of ``db`` in ``folder`` (SQLite's backup: safe beside a running writer) without
+    the bead rule's own replicas numbered ≥ ``bead_cap``; its path."""
+    copy = str(Path(folder) / "replay.db")
+    with sqlite3.connect(db) as src, sqlite3.connect(copy) as dst:
+        src.backup(dst)
+    with sqlite3.connect(copy) as con:
+        con.execute("DELETE FROM replicas WHERE exclusion = 'bead' AND replica >= ? "
+                    "AND replica < ?", (bead_cap, FRESH_BELOW))
+    return copy
+
+
 def replay(db: str, bead_cap: int, tube_cap: int | None, legs: int) -> dict:
     """The verdicts and CPU of the database with the replicas the caps rule out removed."""
     with tempfile.TemporaryDirectory() as tmp:
-        copy = str(Path(tmp) / "replay.db")
-        with sqlite3.connect(db) as src, sqlite3.connect(copy) as dst:
-            src.backup(dst)
+        copy = capped_copy(db, tmp, bead_cap)
         with sqlite3.connect(copy) as con:
-            con.execute("DELETE FROM replicas WHERE exclusion = 'bead' AND replica >= ? "
-                        "AND replica < ?", (bead_cap, FRESH_BELOW))
             gone = []  # tube replica numbers removed (their seeds go too)
             if tube_cap is not None:
                 gone += [r for (r,) in con.execute(

@@ -33,3 +33,23 @@ def trefoil(n=120, R=2.0):
     return np.column_stack(
         [(R + np.cos(3 * t)) * np.cos(2 * t), (R + np.cos(3 * t)) * np.sin(2 * t), np.sin(3 * t)]
     )
+
+
+BENCH = Path(__file__).resolve().parents[1] / "bench"
+
+
+def load_bench(name: str):
+    """The module of the script ``bench/<name>.py`` (bench/ is no package), imported once;
+    bench/ goes on sys.path for the script's own imports of its neighbours."""
+    import importlib.util
+    import sys
+
+    if name in sys.modules:
+        return sys.modules[name]
+    if str(BENCH) not in sys.path:
+        sys.path.append(str(BENCH))
+    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod

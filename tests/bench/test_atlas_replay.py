@@ -1,27 +1,18 @@
 """bench/atlas_replay.py: a database replayed under a lower cap holds exactly what a sweep with
 that cap stores — the replay's premise (replicas are a prefix) — with the same verdicts."""
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
 
+from helpers import load_bench
 from stiffknots.store.sqlite import Store
 from stiffknots.sweeps import budget_of, parse_models, run_sweep
-
-_PATH = Path(__file__).resolve().parents[2] / "bench" / "atlas_replay.py"
 
 pytestmark = pytest.mark.slow  # two sweeps on a local Dask cluster (≈ 30–60 s)
 
 
 @pytest.fixture(scope="module")
 def replay_mod():
-    spec = importlib.util.spec_from_file_location("atlas_replay", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["atlas_replay"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_bench("atlas_replay")
 
 
 def _keys(path):

