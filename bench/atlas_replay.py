@@ -38,11 +38,14 @@ import tempfile
 from pathlib import Path
 
 from stiffknots.store.sqlite import Store
+from stiffknots.sweeps import BUDGETS
 from stiffknots.sweeps.convergence import ensemble_converged
 from stiffknots.sweeps.cross import OLDER_SEEDED_REPLICA, SEEDED_REPLICA
 from stiffknots.sweeps.legs import LEG_REPLICA
 
 FRESH_BELOW = OLDER_SEEDED_REPLICA  # below it: the replicas of a model's own searches
+#: the budget the stored sweep ran (its tube cap and legs)
+STORED = BUDGETS["default"]
 
 
 def _ints(s: str) -> list[int]:
@@ -62,10 +65,10 @@ def verdicts(path: str) -> dict:
         n[ex] = int(k)
     for ex in sorted({g["exclusion"] for g in grounds}):
         gs = [g for g in grounds if g["exclusion"] == ex]
-        conv = [g["knot"] for g in gs if ensemble_converged(g)]
-        out[ex] = {"knots": len(gs), "converged": len(conv), "cpu_seconds": round(cpu[ex], 1),
-                   "replicas": n[ex],
-                   "not_converged": sorted(g["knot"] for g in gs if not ensemble_converged(g))}
+        missed = sorted(g["knot"] for g in gs if not ensemble_converged(g))
+        out[ex] = {"knots": len(gs), "converged": len(gs) - len(missed),
+                   "cpu_seconds": round(cpu[ex], 1), "replicas": n[ex],
+                   "not_converged": missed}
     st.close()
     return out
 
@@ -83,24 +86,22 @@ def capped_copy(db: str, folder: str, bead_cap: int) -> str:
 
 
 def replay(db: str, bead_cap: int, tube_cap: int | None, legs: int) -> dict:
-    """The verdicts and CPU of the database with the replicas the caps rule out removed."""
+    """The verdicts and CPU of the database with the replicas the caps rule out removed
+    (``tube_cap`` None: the stored tube replicas and the first ``legs`` legs kept; a
+    ``tube_cap``: every leg removed)."""
+    top = FRESH_BELOW if tube_cap is None else tube_cap
+    first_leg = LEG_REPLICA + (legs if tube_cap is None else 0)
     with tempfile.TemporaryDirectory() as tmp:
         copy = capped_copy(db, tmp, bead_cap)
         with sqlite3.connect(copy) as con:
-            gone = []  # tube replica numbers removed (their seeds go too)
-            if tube_cap is not None:
-                gone += [r for (r,) in con.execute(
-                    "SELECT DISTINCT replica FROM replicas WHERE exclusion = 'tube' AND "
-                    "((replica >= ? AND replica < ?) OR replica >= ?)",
-                    (tube_cap, FRESH_BELOW, LEG_REPLICA))]
-            gone += [r for (r,) in con.execute(
+            gone = [(r,) for (r,) in con.execute(  # tube replica numbers; their seeds go too
                 "SELECT DISTINCT replica FROM replicas WHERE exclusion = 'tube' AND "
-                "replica >= ?", (LEG_REPLICA + legs,))]
-            for r in set(gone):
-                con.execute("DELETE FROM replicas WHERE exclusion = 'tube' AND replica = ?",
-                            (r,))
-                con.execute("DELETE FROM replicas WHERE exclusion = 'bead' AND replica = ?",
-                            (SEEDED_REPLICA + r,))
+                "((replica >= ? AND replica < ?) OR replica >= ?)",
+                (top, FRESH_BELOW, first_leg))]
+            con.executemany("DELETE FROM replicas WHERE exclusion = 'tube' AND replica = ?",
+                            gone)
+            con.executemany("DELETE FROM replicas WHERE exclusion = 'bead' AND replica = ?",
+                            [(SEEDED_REPLICA + r,) for (r,) in gone])
         return verdicts(copy)
 
 
@@ -110,7 +111,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--bead-caps", default="4,6,8,10,12,16")
     ap.add_argument("--tube-caps", default="2,4,6", help="the stored cap keeps its legs")
     ap.add_argument("--legs", default="0,1,2")
-    ap.add_argument("--stored-tube-cap", type=int, default=6)
+    ap.add_argument("--stored-tube-cap", type=int, default=STORED.max_replicas,
+                    help="the stored sweep's tube cap (default: the default budget's)")
+    ap.add_argument("--stored-legs", type=int, default=STORED.legs,
+                    help="the stored sweep's tube legs (default: the default budget's)")
     ap.add_argument("--wall", type=float, help="the stored sweep's wall minutes")
     ap.add_argument("--wall-per-cpu", type=float)
     ap.add_argument("--json")
@@ -124,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
             for bc in _ints(a.bead_caps):
                 v = replay(a.db, bc, tc if tc < a.stored_tube_cap else None, lg)
                 cpu = sum(m["cpu_seconds"] for m in v.values())
-                lower = tc < a.stored_tube_cap or lg < 2
+                lower = tc < a.stored_tube_cap or lg < a.stored_legs
                 rows.append({"bead_cap": bc, "tube_cap": tc, "legs": lg,
                              "bead": v["bead"]["converged"], "tube": v["tube"]["converged"],
                              "knots": v["tube"]["knots"], "bead_lower_bound": lower,
