@@ -295,6 +295,19 @@ def test_a_langevin_bead_search_is_its_own_ensemble_and_leaves_the_tube_alone():
     assert budget_of("small", replicas=3, bead_search="langevin").bead_search == "langevin"
     with pytest.raises(InvalidParameter, match="bead_search must be annealing or langevin"):
         budget_of("tiny", bead_search="dynamics")
+    # deeper dynamics: another bead ensemble, the caps and the tube untouched; refused where
+    # the bead search counts Monte Carlo moves
+    deep = budget_of("default", bead_steps=3_000_000)
+    assert (deep.name, deep.bead_steps, deep.most_replicas(bead)) == ("default", 3_000_000, 16)
+    assert sweep_settings(bead, deep)["moves"] == 3_000_000
+    assert settings_hash(sweep_settings(bead, deep)) != settings_hash(s)
+    assert settings_hash(sweep_settings(tube, deep)) == settings_hash(sweep_settings(tube, lan))
+    assert budget_of("default", replicas=4, bead_steps=2_000).bead_steps == 2_000
+    with pytest.raises(InvalidParameter, match="bead_steps must be given with a Langevin bead "
+                                               "search only .*not with annealing"):
+        budget_of("tiny", bead_steps=2_000_000)
+    with pytest.raises(InvalidParameter, match=r"bead_steps must be an integer in \[1,000"):
+        budget_of("default", bead_steps=10)
     # the job a worker runs is the dynamics (short here), verified, with the key's settings
     tiny = replace(budget_of("tiny", bead_search="langevin"), bead_steps=20_000)
     (job, _) = plan_sweep(["3_1"], [bead], tiny, seed=1)

@@ -110,7 +110,7 @@ class Budget:
         if self.bead_search not in BEAD_SEARCHES:
             raise InvalidParameter("bead_search", self.bead_search,
                                    " or ".join(BEAD_SEARCHES))
-        V.moves(self.bead_steps)
+        V.moves(self.bead_steps, "bead_steps")
         return self
 
     def langevin(self, model) -> bool:
@@ -161,15 +161,24 @@ BUDGETS: dict[str, Budget] = {
 
 
 def budget_of(name: str, *, replicas: int | None = None, moves: int | None = None,
-              bead_search: str | None = None) -> Budget:
+              bead_search: str | None = None, bead_steps: int | None = None) -> Budget:
     """The named budget, with ``replicas`` or ``moves`` overridden where given (the name then
-    becomes ``custom``, with no replicas added and no legs), and its bead-rule search where
-    ``bead_search`` is given (:data:`BEAD_SEARCHES`; the name stays).
+    becomes ``custom``, with no replicas added and no legs), its bead-rule search where
+    ``bead_search`` is given (:data:`BEAD_SEARCHES`; the name stays), and the dynamics steps
+    of a Langevin bead replica where ``bead_steps`` is given (the name and the caps stay; the
+    replicas are another ensemble: the steps are part of their settings).
+
+    Why a deeper bead search is offered (2026-12-05, twelfth session; bench/RESULTS.md): on
+    24 knots whose 16 Langevin replicas of 10⁶ steps never converged in the 249-knot atlas,
+    4 replicas of 3·10⁶ steps converged 6 and reached states up to 8 % lower (10_30: 267.18
+    against 291.09) — and for 12 of the 24 stayed higher: the bead rule's landscape there has
+    funnels far apart that any search finds by chance.
 
     Raises
     ------
     InvalidParameter
-        An unknown name (the message lists the budgets), a bad count, an unknown search.
+        An unknown name (the message lists the budgets), a bad count, an unknown search,
+        ``bead_steps`` with a bead search that is not Langevin dynamics.
     """
     from dataclasses import replace
 
@@ -178,6 +187,13 @@ def budget_of(name: str, *, replicas: int | None = None, moves: int | None = Non
     b = BUDGETS[name]
     if bead_search is not None:
         b = replace(b, bead_search=bead_search).validate()
+    if bead_steps is not None:
+        if b.bead_search != "langevin":
+            raise InvalidParameter(
+                "bead_steps", bead_steps,
+                "given with a Langevin bead search only (bead search langevin, the default "
+                f"and full budgets'), not with {b.bead_search}, which counts Monte Carlo moves")
+        b = replace(b, bead_steps=bead_steps).validate()
     if replicas is None and moves is None:
         return b
     return replace(b, name="custom", replicas=b.replicas if replicas is None else replicas,
