@@ -29,7 +29,6 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 
 from atlas_replay import capped_copy, verdicts  # noqa: E402
-
 from stiffknots.sweeps.cross import OLDER_SEEDED_REPLICA  # noqa: E402
 
 SHIFT = 100  # the deeper replicas' numbers in the pooled copy: r + SHIFT (above any cap)
@@ -57,7 +56,7 @@ def pooled_copy(atlas: str, deep: str, folder: str, cap: int, knots: list[str]) 
     cols = [r[1] for r in con.execute("PRAGMA table_info(replicas)") if r[1] != "id"]
     src = sqlite3.connect(deep)
     for row in src.execute(f"SELECT {','.join(cols)} FROM replicas WHERE exclusion = 'bead'"):
-        d = dict(zip(cols, row))
+        d = dict(zip(cols, row, strict=True))
         d.update(settings_hash=target, replica=d["replica"] + SHIFT)
         extra = json.loads(d["extra"])
         extra.pop("search", None)
