@@ -44,14 +44,22 @@ def _bead_hash(con: sqlite3.Connection, knots: list[str]) -> str:
     return hashes[0]
 
 
-def pooled_copy(atlas: str, deep: str, folder: str, cap: int, knots: list[str]) -> str:
-    """A copy of ``atlas`` with only ``knots``, its own bead replicas numbered below ``cap``,
-    and every bead replica of ``deep`` added to the same ensemble (numbers + :data:`SHIFT`,
-    the atlas's settings hash; their ``search`` is their own replica)."""
+def _knots_copy(atlas: str, folder: str, cap: int, knots: list[str]) -> str:
+    """A copy of ``atlas`` with only ``knots`` and its own bead replicas numbered below
+    ``cap`` (:func:`atlas_replay.capped_copy`); its path."""
     path = capped_copy(atlas, folder, cap)
+    with sqlite3.connect(path) as con:
+        q = ",".join("?" * len(knots))
+        con.execute(f"DELETE FROM replicas WHERE knot NOT IN ({q})", knots)
+    return path
+
+
+def pooled_copy(atlas: str, deep: str, folder: str, cap: int, knots: list[str]) -> str:
+    """:func:`_knots_copy` with every bead replica of ``deep`` added to the same ensemble
+    (numbers + :data:`SHIFT`, the atlas's settings hash; their ``search`` is their own
+    replica)."""
+    path = _knots_copy(atlas, folder, cap, knots)
     con = sqlite3.connect(path)
-    q = ",".join("?" * len(knots))
-    con.execute(f"DELETE FROM replicas WHERE knot NOT IN ({q})", knots)
     target = _bead_hash(con, knots)
     cols = [r[1] for r in con.execute("PRAGMA table_info(replicas)") if r[1] != "id"]
     src = sqlite3.connect(deep)
@@ -95,13 +103,16 @@ def main(argv: list[str] | None = None) -> int:
         own = lowest(atlas, k, f"replica < {OLDER_SEEDED_REPLICA}")
         seeded = lowest(atlas, k, f"replica >= {OLDER_SEEDED_REPLICA}")
         d = lowest(deep, k, "1")
-        rel = None if own is None else d / min(own, seeded or own) - 1.0
+        stored = [e for e in (own, seeded) if e is not None]
+        rel = d / min(stored) - 1.0 if stored else None
         lower += rel is not None and rel < -1e-3
         higher += rel is not None and rel > 1e-3
         per_knot.append({"knot": k, "atlas_own": own, "atlas_seeded": seeded, "deeper": d,
                          "deeper_vs_atlas": rel})
-        print(f"{k:7s} atlas own {own:9.3f}  seeded {seeded or float('nan'):9.3f}  "
-              f"deeper {d:9.3f}  ({100 * rel:+.2f} % against the atlas's lowest)")
+        nan = float("nan")
+        print(f"{k:7s} atlas own {own or nan:9.3f}  seeded {seeded or nan:9.3f}  "
+              f"deeper {d:9.3f}  " + (f"({100 * rel:+.2f} % against the atlas's lowest)"
+                                      if rel is not None else "(not in the atlas)"))
     out = {"atlas": a.atlas, "deep": a.deep, "knots": knots, "deeper_steps": steps,
            "deeper_replicas": n_deep, "deeper_cpu_seconds": round(cpu, 1),
            "lower_by_more_than_0.1%": lower, "higher_by_more_than_0.1%": higher,
@@ -112,13 +123,8 @@ def main(argv: list[str] | None = None) -> int:
             path = pooled_copy(a.atlas, a.deep, folder, cap, knots)
             out["verdicts"][f"atlas own < {cap} + seeded + deeper"] = verdicts(path)["bead"]
             Path(path).unlink()
-        capped = capped_copy(a.atlas, folder, 16)
-        con = sqlite3.connect(capped)
-        q = ",".join("?" * len(knots))
-        con.execute(f"DELETE FROM replicas WHERE knot NOT IN ({q})", knots)
-        con.commit()
-        con.close()
-        out["verdicts"]["atlas alone"] = verdicts(capped)["bead"]
+        out["verdicts"]["atlas alone"] = verdicts(_knots_copy(a.atlas, folder, 16,
+                                                              knots))["bead"]
     print(f"{len(knots)} knots; deeper replicas ({steps} steps): {n_deep}, {cpu:.0f} CPU s; "
           f"deeper lowest below the atlas's by > 0.1 %: {lower}, above: {higher}")
     for name, v in out["verdicts"].items():
