@@ -1,7 +1,8 @@
 """What a smaller budget would have given: an atlas database replayed under lower caps.
 
     python bench/atlas_replay.py DB [--bead-caps 4,6,8,10,12,16] [--tube-caps 2,4,6]
-                                    [--legs 0,1,2] [--wall-per-cpu F] [--json FILE]
+                                    [--legs 0,1,2] [--bead-legs 0,4] [--wall-per-cpu F]
+                                    [--json FILE]
 
 A sweep's replicas are a prefix: replica r's seed and start depend only on the replicas
 before it (``stiffknots.sweeps.plan``), and a (knot, model) gets two more replicas while it
@@ -15,14 +16,18 @@ replicas left:
 * ``tube cap m`` (m < the stored cap): the tube replicas numbered ≥ m, *all* continuation legs
   (a leg continues the second-lowest of the first m searches, not stored), and the bead
   replicas seeded from any of them (replica 2,000,000 + r);
-* ``legs l``: the legs numbered ≥ l (replica 1,500,000 + k) and their seeds.
+* ``legs l``: the tube legs numbered ≥ l (replica 1,500,000 + k) and their seeds;
+* ``bead legs b``: the Langevin bead legs numbered ≥ b (replica 1,500,000 + k of a bead
+  ensemble); every bead leg where the bead cap is below the stored one (a leg continues one
+  of the searches stored when it was planned).
 
 Where a removed seeded replica was the second opinion of a bead verdict, the capped sweep
 would have added bead replicas the database does not hold: that verdict counts as not
 converged, so a row's bead count is a lower bound whenever tube replicas or legs are removed
-(marked ``≥``). Wall time is estimated as CPU seconds × ``--wall-per-cpu`` (default: the
-stored sweep's, the wall seconds of its stretches over its CPU seconds, when given with
-``--wall`` in minutes; otherwise 0.5 — two cores fully used).
+(marked ``≥``); likewise where bead legs are removed below a lower bead cap (the capped
+sweep would have run legs of its own). Wall time is estimated as CPU seconds ×
+``--wall-per-cpu`` (default: the stored sweep's, the wall seconds of its stretches over its
+CPU seconds, when given with ``--wall`` in minutes; otherwise 0.5 — two cores fully used).
 
 Every ε at the stored width (N and d or w/L); seed 0 as stored.
 """
@@ -85,10 +90,21 @@ def capped_copy(db: str, folder: str, bead_cap: int) -> str:
     return copy
 
 
-def replay(db: str, bead_cap: int, tube_cap: int | None, legs: int) -> dict:
+def _has_bead_legs(db: str, kept: int) -> bool:
+    """Whether ``db`` holds bead legs numbered ≥ ``kept`` (a replay that removes them counts
+    a lower bound: a capped sweep would have run legs of its own)."""
+    with sqlite3.connect(db) as con:
+        return con.execute("SELECT COUNT(*) FROM replicas WHERE exclusion = 'bead' AND "
+                           "replica >= ? AND replica < ?",
+                           (LEG_REPLICA + kept, SEEDED_REPLICA)).fetchone()[0] > 0
+
+
+def replay(db: str, bead_cap: int, tube_cap: int | None, legs: int,
+           bead_legs: int | None = None) -> dict:
     """The verdicts and CPU of the database with the replicas the caps rule out removed
     (``tube_cap`` None: the stored tube replicas and the first ``legs`` legs kept; a
-    ``tube_cap``: every leg removed)."""
+    ``tube_cap``: every leg removed; ``bead_legs``: the first that many bead legs kept, None
+    all)."""
     top = FRESH_BELOW if tube_cap is None else tube_cap
     first_leg = LEG_REPLICA + (legs if tube_cap is None else 0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -102,6 +118,9 @@ def replay(db: str, bead_cap: int, tube_cap: int | None, legs: int) -> dict:
                             gone)
             con.executemany("DELETE FROM replicas WHERE exclusion = 'bead' AND replica = ?",
                             [(SEEDED_REPLICA + r,) for (r,) in gone])
+            if bead_legs is not None:
+                con.execute("DELETE FROM replicas WHERE exclusion = 'bead' AND replica >= ? "
+                            "AND replica < ?", (LEG_REPLICA + bead_legs, SEEDED_REPLICA))
         return verdicts(copy)
 
 
@@ -111,6 +130,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--bead-caps", default="4,6,8,10,12,16")
     ap.add_argument("--tube-caps", default="2,4,6", help="the stored cap keeps its legs")
     ap.add_argument("--legs", default="0,1,2")
+    ap.add_argument("--bead-legs", default="",
+                    help="bead legs kept, e.g. 0,4 (default: as stored)")
+    ap.add_argument("--stored-bead-cap", type=int, default=STORED.bead_max_replicas,
+                    help="the stored sweep's bead cap (default: the default budget's)")
     ap.add_argument("--stored-tube-cap", type=int, default=STORED.max_replicas,
                     help="the stored sweep's tube cap (default: the default budget's)")
     ap.add_argument("--stored-legs", type=int, default=STORED.legs,
@@ -126,21 +149,25 @@ def main(argv: list[str] | None = None) -> int:
     for tc in _ints(a.tube_caps):
         for lg in (_ints(a.legs) if tc >= a.stored_tube_cap else [0]):
             for bc in _ints(a.bead_caps):
-                v = replay(a.db, bc, tc if tc < a.stored_tube_cap else None, lg)
-                cpu = sum(m["cpu_seconds"] for m in v.values())
-                lower = tc < a.stored_tube_cap or lg < a.stored_legs
-                rows.append({"bead_cap": bc, "tube_cap": tc, "legs": lg,
-                             "bead": v["bead"]["converged"], "tube": v["tube"]["converged"],
-                             "knots": v["tube"]["knots"], "bead_lower_bound": lower,
-                             "cpu_seconds": round(cpu, 1),
-                             "bead_cpu": v["bead"]["cpu_seconds"],
-                             "tube_cpu": v["tube"]["cpu_seconds"],
-                             "wall_hours": round(cpu * f / 3600, 2)})
-                r = rows[-1]
-                print(f"tube cap {tc} legs {lg} bead cap {bc:2d}: bead "
-                      f"{'≥' if lower else ' '}{r['bead']}/{r['knots']}, tube {r['tube']}/"
-                      f"{r['knots']}, CPU {cpu:8.0f} s (bead {r['bead_cpu']:.0f}, tube "
-                      f"{r['tube_cpu']:.0f}), ≈ {r['wall_hours']:.2f} h wall", flush=True)
+                for bl in (_ints(a.bead_legs) or [None]):
+                    kept = 0 if bc < a.stored_bead_cap else bl
+                    v = replay(a.db, bc, tc if tc < a.stored_tube_cap else None, lg, kept)
+                    cpu = sum(m["cpu_seconds"] for m in v.values())
+                    lower = (tc < a.stored_tube_cap or lg < a.stored_legs
+                             or (kept is not None and _has_bead_legs(a.db, kept)))
+                    rows.append({"bead_cap": bc, "tube_cap": tc, "legs": lg, "bead_legs": kept,
+                                 "bead": v["bead"]["converged"], "tube": v["tube"]["converged"],
+                                 "knots": v["tube"]["knots"], "bead_lower_bound": lower,
+                                 "cpu_seconds": round(cpu, 1),
+                                 "bead_cpu": v["bead"]["cpu_seconds"],
+                                 "tube_cpu": v["tube"]["cpu_seconds"],
+                                 "wall_hours": round(cpu * f / 3600, 2)})
+                    r = rows[-1]
+                    print(f"tube cap {tc} legs {lg} bead cap {bc:2d}"
+                          + ("" if kept is None else f" bead legs {kept}") + ": bead "
+                          f"{'≥' if lower else ' '}{r['bead']}/{r['knots']}, tube {r['tube']}/"
+                          f"{r['knots']}, CPU {cpu:8.0f} s (bead {r['bead_cpu']:.0f}, tube "
+                          f"{r['tube_cpu']:.0f}), ≈ {r['wall_hours']:.2f} h wall", flush=True)
     if a.json:
         Path(a.json).write_text(json.dumps({"db": a.db, "wall_per_cpu": f, "stored": base,
                                             "replays": rows}, indent=1) + "\n")

@@ -11,7 +11,13 @@ import pytest
 from stiffknots.engine.driver import replica_seeds
 from stiffknots.store import Store, search_of
 from stiffknots.sweeps.convergence import hits, is_converged
-from stiffknots.sweeps.legs import LEG_EXCLUSIONS, LEG_REPLICA, leg_parent, searches
+from stiffknots.sweeps.legs import (
+    LEG_EXCLUSIONS,
+    LEG_REPLICA,
+    langevin_leg_parent,
+    leg_parent,
+    searches,
+)
 
 
 def _row(replica, eps, search=None, start="braid"):
@@ -40,6 +46,59 @@ def test_the_leg_continues_the_second_lowest_search():
     assert leg_parent(rows)["replica"] == 1
     assert leg_parent([_row(0, 5.0)])["replica"] == 0  # one search: continue it
     assert leg_parent([]) is None
+
+
+def test_langevin_leg_k_continues_the_k_th_lowest_own_search():
+    """A Langevin bead leg k continues the (k+1)-th lowest search of the ensemble's own (a
+    search seeded from a tube replica cannot certify, so it is not continued), counted round
+    again past the last; a leg that went lower moves its search up the ranking."""
+    rows = [_row(0, 101.0), _row(1, 100.0), _row(2, 100.5), _row(2_000_000, 99.0,
+                                                                    start="tube-ground")]
+    assert [langevin_leg_parent(rows, k)["replica"] for k in range(4)] == [1, 2, 0, 1]
+    rows.append(_row(LEG_REPLICA, 99.5, search=0))  # leg of search 0, now the lowest own
+    assert [langevin_leg_parent(rows, k)["replica"] for k in range(3)] == [LEG_REPLICA, 1, 2]
+    assert langevin_leg_parent([_row(2_000_000, 9.0, start="tube-ground")], 0) is None
+    assert langevin_leg_parent([], 0) is None
+
+
+def test_which_ensembles_get_which_legs():
+    """The default budget: the tube model 2 basin-hop legs, the Langevin bead rule 4
+    Langevin legs, the annealed bead rule none; a custom budget none."""
+    from stiffknots.sweeps import budget_of, parse_models
+
+    bead, tube = parse_models("bead,tube")
+    d = budget_of("default")
+    assert (d.legs_of(tube), d.legs_of(bead)) == (2, 4)
+    assert budget_of("default", bead_search="annealing").legs_of(bead) == 0
+    assert budget_of("default", moves=100_000).legs_of(bead) == 0
+    assert d.as_dict()["bead_legs"] == 4
+
+
+def test_a_langevin_leg_reheats_the_parent_chain():
+    """ClosedAnneal.langevin_leg_jobs: one job per parent, from its chain, the Langevin
+    schedule reheated to 2·10⁻³ (at N = 150) and cooled to the replica's t_end over 0.3 × its
+    steps; no such legs under an annealing schedule."""
+    from types import SimpleNamespace
+
+    from stiffknots.problems.closed import (
+        LANGEVIN_LEG_FRACTION,
+        LANGEVIN_LEG_T_START,
+        ClosedAnneal,
+        langevin_schedule,
+    )
+
+    p = ClosedAnneal("3_1", beads=60, replicas=1, schedule=langevin_schedule(60),
+                     moves=20_000)
+    chain = p.jobs()[0].coords
+    jobs = p.langevin_leg_jobs([SimpleNamespace(coords=chain, start=p.starts[0])], 7)
+    (j,) = jobs
+    assert j.replica == 7 and np.array_equal(j.coords, chain)
+    assert j.settings.schedule.kind == "langevin"
+    assert j.settings.schedule.t_start == pytest.approx(LANGEVIN_LEG_T_START * (150 / 60) ** 2)
+    assert j.settings.schedule.t_end == p.settings.schedule.t_end
+    assert j.settings.moves == round(LANGEVIN_LEG_FRACTION * 20_000)
+    q = ClosedAnneal("3_1", beads=60, replicas=1, moves=20_000)
+    assert q.langevin_leg_jobs([SimpleNamespace(coords=chain, start=q.starts[0])], 7) is None
 
 
 def test_the_verdict_counts_a_leg_and_its_search_once():
@@ -102,3 +161,45 @@ def test_an_unconverged_tube_ensemble_gets_a_leg_stored_once(tmp_path, monkeypat
         n = st.count()
         res2 = run_sweep(["3_1"], models, budget, st, seed=3, workers=1)
         assert (res2.ran, st.count()) == (0, n) and not res2.failed
+
+
+@pytest.mark.slow  # a Dask cluster, two bead replicas, a tube one and its seed (≈ 30–60 s)
+def test_an_unconverged_langevin_bead_ensemble_gets_langevin_legs(tmp_path, monkeypatch):
+    """The verdict forced to "not converged": after its two Langevin replicas the bead
+    ensemble of 3_1 gets two Langevin legs, leg k continuing the (k+1)-th lowest own search
+    (the seeded replica not), each verified, in the ensemble's settings hash; a second sweep
+    runs nothing."""
+    from dataclasses import replace
+
+    import stiffknots.sweeps.run as run_mod
+    from stiffknots.sweeps import budget_of, parse_models, run_sweep
+
+    monkeypatch.setattr(run_mod, "ensemble_converged", lambda *a, **k: False)
+    budget = replace(budget_of("tiny", moves=50_000, bead_search="langevin"), bead_steps=20_000,
+                     bead_max_replicas=2, bead_legs=2)
+    models = parse_models("bead,tube")
+    with Store(tmp_path / "s.db") as st:
+        res = run_sweep(["3_1"], models, budget, st, seed=5, workers=1)
+        assert not res.failed, res.failed
+        bead = {r["replica"]: r for r in st.replicas(exclusion="bead")}
+        legs = [bead[LEG_REPLICA], bead[LEG_REPLICA + 1]]
+        own = sorted((bead[0], bead[1]), key=lambda r: (r["epsilon"], r["replica"]))
+        # leg 0 continued the lowest own search; leg 1 the second-lowest at its planning
+        assert legs[0]["extra"]["leg_of"] == own[0]["replica"]
+        ranked = searches([bead[0], bead[1], legs[0]])  # the own searches when leg 1 was planned
+        assert legs[1]["extra"]["leg_of"] == ranked[1]["replica"]
+        for leg in legs:
+            assert leg["knot_verified"] is True and leg["start"] != "tube-ground"
+            assert leg["settings_hash"] == own[0]["settings_hash"]
+        assert not any(r["replica"] >= LEG_REPLICA for r in st.replicas(exclusion="tube"))
+        assert res.legs == 2
+        n = st.count()
+        res2 = run_sweep(["3_1"], models, budget, st, seed=5, workers=1)
+        assert (res2.ran, st.count()) == (0, n) and not res2.failed
+    # bench/atlas_replay.py keeps the first b bead legs (--bead-legs): 2, 1, 0 of them
+    from helpers import load_bench
+
+    replay = load_bench("atlas_replay").replay
+    kept = [replay(str(tmp_path / "s.db"), 16, None, 0, b)["bead"]["replicas"]
+            for b in (None, 2, 1, 0)]
+    assert kept == [len(bead), len(bead), len(bead) - 1, len(bead) - 2]

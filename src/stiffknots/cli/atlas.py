@@ -185,8 +185,8 @@ def atlas(
         help="Replicas × moves per knot and model: tiny (2 × 0.2 M, a smoke test), small "
              "(2 × 5 M), default (2 × 15 M, up to 6 replicas until converged, then up to 2 "
              "continuation legs for the tube model; the bead model's replicas Langevin "
-             "dynamics of 10⁶ steps, up to 16) or full (4 × 60 M, up to 12, 2 legs; bead "
-             "Langevin up to 32).")
+             "dynamics of 10⁶ steps, up to 16, then up to 4 Langevin legs) or full (4 × 60 "
+             "M, up to 12, 2 legs; bead Langevin up to 32, 4 legs).")
     ] = "default",
     out_dir: Annotated[str, typer.Option(
         "--out", help="Folder of the atlas pages.")] = "results/atlas",

@@ -56,6 +56,16 @@ def langevin_schedule(beads: int) -> Schedule:
 LEG_HOPS = 8
 #: … of this fraction of a replica's moves in all (12 M of the default 15 M at N = 150)
 LEG_FRACTION = 0.8
+#: A Langevin continuation leg of the atlas's bead ensembles
+#: (:meth:`ClosedAnneal.langevin_leg_jobs`): the dynamics from the parent's polished chain,
+#: reheated to this temperature × (150/N)² (a replica starts at 0.1) …
+LANGEVIN_LEG_T_START = 2e-3
+#: … for this fraction of a replica's steps (3·10⁵ of the default 10⁶), cooled as a
+#: replica to its ``t_end``. Measured on the 96 bead ensembles the 249-knot atlas left
+#: unconverged (one leg from each of the four lowest own searches, 384 legs, 1.3 CPU s each):
+#: 9 converged; reheated to 10⁻² (three legs each) 6 converged and 28 grounds went lower
+#: by > 0.1 % — those legs leave the funnel (bench/RESULTS.md, 2026-12-05, thirteenth session)
+LANGEVIN_LEG_FRACTION = 0.3
 #: Tube-route searches of the bead rule (opt-in: ``tube_route=True``): in a bead-rule run, the
 #: new searches of this round on (0-based: the third, the first after the fresh rounds) anneal
 #: under the tube rule of diameter w = d and are then polished under the bead rule. A tube
@@ -204,6 +214,30 @@ class ClosedAnneal(Problem):
                       hops=LEG_HOPS - 1, hop_fraction=(LEG_HOPS - 1) / LEG_HOPS)
         settings = replace(self.settings, schedule=leg,
                            moves=V.moves(max(1_000, round(LEG_FRACTION
+                                                          * self.settings.moves))))
+        by_index = dict(enumerate(parents, start=first))
+        return self._replica_jobs(settings, lambda r: by_index[r].coords,
+                                  lambda r: by_index[r].start,
+                                  lambda r: self.codes[by_index[r].start],
+                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds,
+                                  first, count=len(parents))
+
+    def langevin_leg_jobs(self, parents: list, first: int) -> list[Job] | None:
+        """Continue each parent's search by the Langevin dynamics from its (polished) chain:
+        reheated to :data:`LANGEVIN_LEG_T_START` × (150/N)², cooled to the schedule's
+        ``t_end`` over :data:`LANGEVIN_LEG_FRACTION` of a replica's steps, then polished like
+        a replica (the atlas's bead legs, :mod:`stiffknots.sweeps.legs`). None unless the
+        schedule is ``langevin``. ``anneal``'s own rounds do not use it (their Langevin
+        rounds start new searches, as measured in bench/RESULTS.md, ninth session)."""
+        from dataclasses import replace
+
+        sch = self.settings.schedule
+        if sch.kind != "langevin":
+            return None
+        t0 = LANGEVIN_LEG_T_START * (150 / self.beads) ** 2
+        leg = replace(sch, t_start=max(t0, 2.0 * sch.t_end))
+        settings = replace(self.settings, schedule=leg,
+                           moves=V.moves(max(1_000, round(LANGEVIN_LEG_FRACTION
                                                           * self.settings.moves))))
         by_index = dict(enumerate(parents, start=first))
         return self._replica_jobs(settings, lambda r: by_index[r].coords,

@@ -29,11 +29,12 @@ from stiffknots.store.keys import (
     thickness_key,
 )
 from stiffknots.store.queries import describe_knot, ground_table, to_csv
-from stiffknots.store.rows import OPTIONAL, REQUIRED, row_from_replica, search_of
+from stiffknots.store.rows import OPTIONAL, REQUIRED, SEEDED_START, row_from_replica, search_of
 from stiffknots.store.schema import SCHEMA_VERSION
 from stiffknots.store.sqlite import DEFAULT_PATH, Store
 
 __all__ = ["Store", "DEFAULT_PATH", "ReplicaKey", "KEY_FIELDS", "settings_hash",
            "canonical_json", "thickness_key", "knot_sort_key", "SCHEMA_VERSION", "REQUIRED",
-           "OPTIONAL", "row_from_replica", "search_of", "describe_knot", "ground_table", "to_csv",
+           "OPTIONAL", "SEEDED_START", "row_from_replica", "search_of", "describe_knot",
+           "ground_table", "to_csv",
            "StoreError", "SchemaVersionError", "KeyCollisionError"]

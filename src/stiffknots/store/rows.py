@@ -295,6 +295,11 @@ def row_from_replica(result: Any, *, knot: str, exclusion: str, thickness: float
     return row, coords
 
 
+#: the ``start`` of a bead replica seeded from a tube replica (:mod:`stiffknots.sweeps.cross`):
+#: such a search confirms a state but does not certify it (:mod:`stiffknots.sweeps.convergence`)
+SEEDED_START = "tube-ground"
+
+
 def search_of(row: Mapping[str, Any]) -> int:
     """The search (independent search of an ensemble) a stored replica belongs to: its
     ``extra["search"]`` where it has one — a sweep's continuation leg, the search it continued

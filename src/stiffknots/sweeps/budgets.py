@@ -13,7 +13,9 @@ not depend on the number of replicas). A (knot, model) whose ground state has no
 once its replicas have ended gets two more, up to ``max_replicas`` (a Langevin bead ensemble:
 ``bead_max_replicas``; :func:`stiffknots.sweeps.run.run_sweep`): easy knots stop at two, hard
 ones get more; a tube ensemble still not converged then gets up to ``legs`` continuation
-legs, each continuing its second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
+legs, each continuing its second-lowest search by basin hops, a Langevin bead ensemble up to
+``bead_legs`` Langevin legs, each continuing one of its lowest searches
+(:mod:`stiffknots.sweeps.legs`).
 
 =========  ========  ==========  ====  ====  =====================  ========================
 budget     replicas  moves       most  legs  bead rule              CPU s per (knot, model)
@@ -21,10 +23,11 @@ budget     replicas  moves       most  legs  bead rule              CPU s per (k
 tiny       2         200,000     2     0     annealing              ≈ 1 — a smoke test
 small      2         5,000,000   2     0     annealing              ≈ 10
 default    2         15,000,000  6     2     Langevin 10⁶ steps,    tube ≈ 20 converged at 2,
-                                             up to 16               ≈ 60 at 6 (a leg ≈ 10–45);
-                                                                    bead ≈ 4 a replica
+                                             up to 16, then 4       ≈ 60 at 6 (a leg ≈ 10–45);
+                                             Langevin legs          bead ≈ 4 a replica, 1.3 a
+                                                                    leg
 full       4         60,000,000  12    2     Langevin 10⁶ steps,    tube ≈ 160 at 4, ≈ 480 at
-                                             up to 32               12; bead ≈ 4 a replica
+                                             up to 32, 4 legs       12; bead ≈ 4 a replica
 =========  ========  ==========  ====  ====  =====================  ========================
 
 Why the Langevin bead search (2026-12-05, tenth session; bench/RESULTS.md): on 18 knots of 9
@@ -51,13 +54,23 @@ from dataclasses import dataclass
 from stiffknots.errors import InvalidParameter
 from stiffknots.problems import validate as V
 
-__all__ = ["Budget", "BUDGETS", "BEAD_SEARCHES", "budget_of", "MEASURED_CPU_SECONDS_PER_M_MOVES"]
+__all__ = ["Budget", "BUDGETS", "BEAD_SEARCHES", "LEG_EXCLUSIONS", "budget_of",
+           "MEASURED_CPU_SECONDS_PER_M_MOVES"]
 
 #: How a bead-rule ensemble searches: ``annealing`` — the paper's Monte Carlo annealing (§VII)
 #: of ``moves`` moves a replica, the tube model's search too — or ``langevin`` — the guarded
 #: Langevin dynamics of :mod:`stiffknots.engine.langevin` (every bead moves at every step;
 #: ``anneal``'s default for the bead rule) of ``bead_steps`` steps a replica.
 BEAD_SEARCHES = ("annealing", "langevin")
+
+#: the exclusion models whose annealed ensembles get basin-hop legs (``Budget.legs``). Not the
+#: bead rule (its Langevin ensembles get Langevin legs instead, ``Budget.bead_legs``): one leg
+#: from the second-lowest replica of six unconverged annealed bead ensembles of the same run
+#: ended at its parent's ε in three (10_100, 10_102, 10_104: the hops at ``t_hop`` do not
+#: leave a bead-rule registry minimum), 0.07 % lower and still 0.82 % above the lowest in one
+#: (10_10), and at the lowest in two whose parent and lowest are both seeded replicas (10_101,
+#: 10_106: a seeded search cannot certify); none converged (bench/RESULTS.md, sixth session)
+LEG_EXCLUSIONS = ("tube",)
 
 #: CPU seconds per million attempted moves of one replica at N = 150 under the default
 #: schedule, its polish included: 7–13 CPU s per 15 M-move replica over the knots through 8
@@ -83,6 +96,7 @@ class Budget:
     legs : int
         Then, while it has not converged, up to this many continuation legs, one at a time,
         each continuing the second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
+        The tube model's, and the bead rule's where it anneals.
     bead_search : str
         How the bead-rule ensembles search (:data:`BEAD_SEARCHES`); the tube model always
         anneals.
@@ -91,6 +105,10 @@ class Budget:
     bead_max_replicas : int or None
         The most replicas of a bead-rule ensemble with ``bead_search = "langevin"`` (None:
         ``max_replicas``): its replicas cost about half an annealing replica.
+    bead_legs : int
+        A Langevin bead ensemble still not converged at ``bead_max_replicas`` gets up to this
+        many Langevin legs, one at a time, leg k continuing the (k+1)-th lowest of its own
+        searches (:mod:`stiffknots.sweeps.legs`; ≈ 1.3 CPU s a leg at N = 150).
     """
 
     name: str
@@ -101,6 +119,7 @@ class Budget:
     bead_search: str = "annealing"
     bead_steps: int = 1_000_000
     bead_max_replicas: int | None = None
+    bead_legs: int = 0
 
     def validate(self) -> Budget:
         """Return self, or raise :class:`InvalidParameter` for a bad count (the limits of
@@ -137,6 +156,14 @@ class Budget:
             return self.bead_max_replicas
         return self.max_replicas or self.replicas
 
+    def legs_of(self, model) -> int:
+        """The most continuation legs of one ``model`` ensemble: ``bead_legs`` for a Langevin
+        bead ensemble, else ``legs`` for the tube model; the annealed bead rule gets none
+        (:data:`LEG_EXCLUSIONS`: its basin hops do not leave a registry minimum)."""
+        if self.langevin(model):
+            return self.bead_legs
+        return self.legs if model.exclusion in LEG_EXCLUSIONS else 0
+
     def cpu_seconds(self) -> float:
         """Estimated CPU seconds of one (knot, model) on one core (N = 150)."""
         return self.replicas * self.moves * 1e-6 * MEASURED_CPU_SECONDS_PER_M_MOVES
@@ -147,16 +174,17 @@ class Budget:
                 "bead_search": self.bead_search,
                 **({"bead_steps": self.bead_steps,
                     "bead_max_replicas": self.bead_max_replicas or self.max_replicas
-                    or self.replicas} if self.bead_search == "langevin" else {})}
+                    or self.replicas, "bead_legs": self.bead_legs}
+                   if self.bead_search == "langevin" else {})}
 
 
 BUDGETS: dict[str, Budget] = {
     "tiny": Budget("tiny", 2, 200_000),
     "small": Budget("small", 2, 5_000_000),
     "default": Budget("default", 2, 15_000_000, max_replicas=6, legs=2,
-                      bead_search="langevin", bead_max_replicas=16),
+                      bead_search="langevin", bead_max_replicas=16, bead_legs=4),
     "full": Budget("full", 4, 60_000_000, max_replicas=12, legs=2,
-                   bead_search="langevin", bead_max_replicas=32),
+                   bead_search="langevin", bead_max_replicas=32, bead_legs=4),
 }
 
 
@@ -198,4 +226,4 @@ def budget_of(name: str, *, replicas: int | None = None, moves: int | None = Non
         return b
     return replace(b, name="custom", replicas=b.replicas if replicas is None else replicas,
                    moves=b.moves if moves is None else moves, max_replicas=None, legs=0,
-                   bead_max_replicas=None).validate()
+                   bead_max_replicas=None, bead_legs=0).validate()

@@ -275,7 +275,9 @@ def run_task(job: Any, budget: Any) -> Any:
 
 def _leg(job: Any, budget: Any) -> Any:
     """The problem job of a continuation leg (:mod:`stiffknots.sweeps.legs`): the solver's
-    :meth:`~stiffknots.problems.closed.ClosedAnneal.continue_jobs` from the parent's chain,
+    :meth:`~stiffknots.problems.closed.ClosedAnneal.continue_jobs` (basin hops; a Langevin
+    bead ensemble's :meth:`~stiffknots.problems.closed.ClosedAnneal.langevin_leg_jobs`) from
+    the parent's chain,
     replica number ``job.replica`` (its seed derives from it). A parent whose start is not
     one of the problem's (a seeded replica's ``tube-ground``) is verified against the
     problem's first start: every start is an embedding of the same knot."""
@@ -288,7 +290,8 @@ def _leg(job: Any, budget: Any) -> Any:
     if start not in problem.codes:
         start = problem.starts[0]
     parent = SimpleNamespace(coords=job.parent["coords"].copy(), start=start)
-    legs = problem.continue_jobs([parent], job.replica)
+    legs = (problem.langevin_leg_jobs([parent], job.replica) if budget.langevin(job.model)
+            else problem.continue_jobs([parent], job.replica))
     if not legs:
         raise RuntimeError(f"{job.id}: this problem cannot continue a search (a bug in "
                            "stiffknots, please report it)")

@@ -34,12 +34,11 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from stiffknots.store.rows import SEEDED_START  # the start of a seeded replica
+
 __all__ = ["MIN_REPLICAS", "REL_TOL", "RULE", "ensemble_converged", "hits", "is_converged",
            "own_hits", "untried_starts"]
 
-#: the start of the replicas seeded from tube replicas (:mod:`stiffknots.sweeps.cross`), which
-#: confirm but do not certify a ground state (module docstring)
-SEEDED_START = "tube-ground"
 
 #: Replicas that must reach the ground state.
 MIN_REPLICAS = 2

@@ -19,6 +19,19 @@ second-lowest replica of six near misses whose two lowest searches lay 0.10–0.
 (10_24, −0.08 %), one stayed where it began (10_28), one went 0.77 % below (9_39)
 (bench/RESULTS.md, sixth session).
 
+Langevin legs of the bead rule. A Langevin bead ensemble (the default budget's) still not
+converged at its cap gets up to ``budget.bead_legs`` legs
+(:meth:`stiffknots.problems.closed.ClosedAnneal.langevin_leg_jobs`: the dynamics from the
+parent's polished chain, reheated to T = 2·10⁻³, 3·10⁵ steps, polished); leg k continues the
+(k+1)-th lowest of the ensemble's *own* searches (a seeded search cannot certify), ranked when
+it is planned: a search's own descent to the bottom of its funnel, so that two searches in
+one funnel can meet at its lowest registry. Measured on the 96 unconverged bead ensembles of
+the 249-knot atlas (a probe: one leg from each of the four lowest own searches): 9 converged
+for 488 CPU s; reheated to 10⁻², 6 converged and 28 grounds went lower alone. The default
+budget's legs on that atlas (the same command resumed): 377 legs, 511 CPU s, 153 → 158
+verdicts (the atlas's replicas 12 → 16 converted 11 for 1,660 CPU s) — of which two lie above
+a deeper search's lowest (bench/RESULTS.md, 2026-12-05, thirteenth session).
+
 Searches. Every stored replica belongs to one search: a fresh replica (or a seeded one,
 :mod:`stiffknots.sweeps.cross`) is its own, a leg belongs to the search it continued —
 ``extra["search"]`` (the replica number of the search's first replica) and
@@ -40,19 +53,14 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
-from stiffknots.store import ReplicaKey, Store, search_of
+from stiffknots.store import SEEDED_START, ReplicaKey, Store, search_of
+from stiffknots.sweeps.budgets import LEG_EXCLUSIONS
 
-__all__ = ["LEG_REPLICA", "LEG_EXCLUSIONS", "searches", "leg_parent", "leg_job"]
+__all__ = ["LEG_REPLICA", "LEG_EXCLUSIONS", "searches", "leg_parent", "langevin_leg_parent",
+           "leg_job"]
 
 #: the replica number of an ensemble's first leg (leg k: this + k)
 LEG_REPLICA = 1_500_000
-#: the exclusion models whose ensembles get legs. Not the bead rule: one leg from the
-#: second-lowest replica of six unconverged bead ensembles of the same run ended at its
-#: parent's ε in three (10_100, 10_102, 10_104: the hops at ``t_hop`` do not leave a
-#: bead-rule registry minimum), 0.07 % lower and still 0.82 % above the lowest in one (10_10),
-#: and at the lowest in two whose parent and lowest are both seeded replicas (10_101, 10_106:
-#: a seeded search cannot certify); none converged (bench/RESULTS.md, sixth session)
-LEG_EXCLUSIONS = ("tube",)
 
 
 def searches(rows: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
@@ -75,7 +83,16 @@ def leg_parent(rows: Sequence[Mapping[str, Any]]) -> Mapping[str, Any] | None:
     return bests[1] if len(bests) > 1 else bests[0]
 
 
-def leg_job(store: Store, job: Any, k: int) -> Any:
+def langevin_leg_parent(rows: Sequence[Mapping[str, Any]], k: int
+                        ) -> Mapping[str, Any] | None:
+    """The row Langevin leg ``k`` starts from (module docstring): the lowest row of the
+    (k+1)-th lowest own search (not seeded from a tube replica), counted round again past the
+    last; None without an own search."""
+    own = [r for r in searches(rows) if r["start"] != SEEDED_START]
+    return own[k % len(own)] if own else None
+
+
+def leg_job(store: Store, job: Any, k: int, langevin: bool = False) -> Any:
     """Leg ``k`` of the ensemble of ``job`` (any :class:`~stiffknots.sweeps.plan.SweepJob` of
     it): a SweepJob for replica :data:`LEG_REPLICA` + k whose ``parent`` holds the chain,
     start, replica and search of :func:`leg_parent` over the replicas stored now; None when the
@@ -84,7 +101,7 @@ def leg_job(store: Store, job: Any, k: int) -> Any:
     rows = store.replicas(knot=key.knot, exclusion=key.exclusion, beads=key.beads,
                           thickness=key.thickness, settings_hash=key.settings_hash,
                           seed=key.seed)
-    p = leg_parent(rows)
+    p = langevin_leg_parent(rows, k) if langevin else leg_parent(rows)
     if p is None:
         return None
     parent = {"id": int(p["id"]), "replica": int(p["replica"]), "search": search_of(p),

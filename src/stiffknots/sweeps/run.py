@@ -57,7 +57,7 @@ from stiffknots.sweeps.cluster import (
 )
 from stiffknots.sweeps.convergence import ensemble_converged as converged_with_every_start
 from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube, seed_pairs
-from stiffknots.sweeps.legs import LEG_EXCLUSIONS, LEG_REPLICA, leg_job
+from stiffknots.sweeps.legs import LEG_REPLICA, leg_job
 from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import (
     SweepJob,
@@ -381,12 +381,12 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
             if new:
                 g["open"] += len(new)
                 return new
-        legs = budget.legs if g["model"].exclusion in LEG_EXCLUSIONS else 0
+        legs = budget.legs_of(g["model"])
         while g["legs"] < legs and not ensemble_converged(
                 store, g["knot"], g["model"], res.settings_hash[g["model"].name]):
             template = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=1),
                                   seed)[0]
-            leg = leg_job(store, template, g["legs"])
+            leg = leg_job(store, template, g["legs"], langevin=budget.langevin(g["model"]))
             if leg is None:
                 break
             g["legs"] += 1
