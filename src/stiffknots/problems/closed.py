@@ -212,9 +212,16 @@ class ClosedAnneal(Problem):
             return None
         leg = replace(sch, kind="geometric", t_start=sch.t_hop, relax_fraction=0.0,
                       hops=LEG_HOPS - 1, hop_fraction=(LEG_HOPS - 1) / LEG_HOPS)
-        settings = replace(self.settings, schedule=leg,
-                           moves=V.moves(max(1_000, round(LEG_FRACTION
-                                                          * self.settings.moves))))
+        return self._leg_jobs(parents, first, leg, LEG_FRACTION)
+
+    def _leg_jobs(self, parents: list, first: int, schedule: Schedule,
+                  fraction: float) -> list[Job]:
+        """One job per parent from its chain and start, replicas ``first`` …, under
+        ``schedule`` for ``fraction`` of a replica's moves (≥ 1,000)."""
+        from dataclasses import replace
+
+        settings = replace(self.settings, schedule=schedule,
+                           moves=V.moves(max(1_000, round(fraction * self.settings.moves))))
         by_index = dict(enumerate(parents, start=first))
         return self._replica_jobs(settings, lambda r: by_index[r].coords,
                                   lambda r: by_index[r].start,
@@ -236,15 +243,7 @@ class ClosedAnneal(Problem):
             return None
         t0 = LANGEVIN_LEG_T_START * (150 / self.beads) ** 2
         leg = replace(sch, t_start=max(t0, 2.0 * sch.t_end))
-        settings = replace(self.settings, schedule=leg,
-                           moves=V.moves(max(1_000, round(LANGEVIN_LEG_FRACTION
-                                                          * self.settings.moves))))
-        by_index = dict(enumerate(parents, start=first))
-        return self._replica_jobs(settings, lambda r: by_index[r].coords,
-                                  lambda r: by_index[r].start,
-                                  lambda r: self.codes[by_index[r].start],
-                                  self.checkpoint_dir, self.resume, self.checkpoint_seconds,
-                                  first, count=len(parents))
+        return self._leg_jobs(parents, first, leg, LANGEVIN_LEG_FRACTION)
 
     def state_of(self, r: Replica) -> tuple[str, float]:
         return r.observables["shape"], r.epsilon
