@@ -110,6 +110,8 @@ def test_writes_index_pages_and_one_copy_of_plotly(atlas, knots):
         assert '<script src="../plotly.min.js"></script>' in text
         assert len(text) < 1_000_000  # plotly.js is referenced, not inlined
     assert len(atlas.read_text(encoding="utf-8")) < 500_000
+    # the verdict's column says what a verdict is not (a proof of the ground state)
+    assert "not proof that no lower state exists" in atlas.read_text(encoding="utf-8")
     # writing again keeps the identical plotly.js (not rewritten) and the pages
     mtime = js.stat().st_mtime_ns
     write_atlas(out, knots, families=synthetic_families(), title="Test atlas",

@@ -1051,7 +1051,11 @@ def _index_page(knots: list[_Knot], models: list[tuple[str, str]], default: str 
             ("ε (ground)", "num", "num",
              "ε = E L / C of the lowest state found, at the width in the next column"),
             ("width", "text", "", "the finite width the ε was computed at"),
-            ("converged", "text", "", "whether the lowest ε was reached repeatedly"),
+            ("converged", "text", "",
+             "whether two independent searches reached the lowest ε found (within 0.1 %): a "
+             "statement about the searches, not proof that no lower state exists — under the "
+             "bead rule at the default budget 9 of 21 verdicts checked against a deeper "
+             "search lay above its lowest (bench/RESULTS.md, 2026-12-05)"),
             ("metastable", "num", "", "the other states found: shape ×count (ε)"),
             ("d<sub>min</sub>", "num", "num",
              "minimum distance between non-adjacent segments of the ground state (the bead "
