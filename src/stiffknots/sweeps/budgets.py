@@ -96,7 +96,7 @@ class Budget:
     legs : int
         Then, while it has not converged, up to this many continuation legs, one at a time,
         each continuing the second-lowest search by basin hops (:mod:`stiffknots.sweeps.legs`).
-        The tube model's, and the bead rule's where it anneals.
+        The tube model's only (:data:`LEG_EXCLUSIONS`; the annealed bead rule gets none).
     bead_search : str
         How the bead-rule ensembles search (:data:`BEAD_SEARCHES`); the tube model always
         anneals.
