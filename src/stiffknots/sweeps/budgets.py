@@ -32,9 +32,10 @@ full       4         60,000,000  12    2     Langevin 10⁶ steps,    tube ≈ 1
 
 Why the Langevin bead search (docs/methods/search.md): on 18 knots of 9 and 10 crossings
 (9_1, 9_7, …, 9_49, 10_1, 10_21, …, 10_161; both models, seed 0) the annealing's bead
-ensembles (2 × 15 M moves, up to 6) converged 6 of 18 for 800 own CPU s, the Langevin ones (up to 16 replicas of 10⁶ steps, 4.0 CPU s each) 13 of 18 for 607 CPU s,
-with lower grounds for 10 knots and higher ones for 4; capped at 6 replicas they would have
-converged 10 for 323 CPU s. Both searches left two verdicts above the other's lowest state.
+ensembles (2 × 15 M moves, up to 6) converged 6 of 18 for 800 own CPU s, the Langevin ones
+(up to 16 replicas of 10⁶ steps, 4.0 CPU s each) 13 of 18 for 607 CPU s, with lower grounds
+for 10 knots and higher ones for 4; capped at 6 replicas they would have converged 10 for
+323 CPU s. Both searches left two verdicts above the other's lowest state.
 The tube ensembles' settings, and so their stored replicas, are the same under both.
 
 Measurements behind the tube rows (``bench/defaults_survey.py``: the same replicas — 15 M
