@@ -8,8 +8,7 @@ import math
 import pytest
 
 from stiffknots.engine.params import MoveParams
-from stiffknots.errors import InvalidParameter, ParameterConflict
-from stiffknots.problems import validate as V
+from stiffknots.errors import InvalidParameter
 from stiffknots.width import BEAD_D, MAX_W_OVER_L, Width
 
 
@@ -76,21 +75,6 @@ def test_engine_parameters_of_a_width_and_back():
     assert p.width(240).w_over_L == pytest.approx(0.003, rel=1e-15)
     b = MoveParams(exclusion="tube", w=0.3).at_width(Width.bead(150))
     assert (b.exclusion, b.d) == ("bead", BEAD_D)
-
-
-def test_problem_width_cross_checks():
-    assert V.width(150) == Width.bead(150)
-    assert V.width(150, "tube") == Width.tube(150)
-    assert V.width(150, "bead", w_over_L=0.002) == Width.tube(150, w_over_L=0.002)
-    assert V.width(150, "tube", w=0.4, default_w=None).thickness == 0.4
-    with pytest.raises(ParameterConflict) as e:
-        V.width(150, "tube", w=0.5, w_over_L=0.001)
-    assert e.value.message(lambda p: "--" + p) == (
-        "--w and --w_over_L both set the tube's diameter; give one")
-    with pytest.raises(ParameterConflict, match="w applies to exclusion tube only"):
-        V.width(150, "bead", w=0.5)
-    with pytest.raises(InvalidParameter, match="w_over_L must be a number in"):
-        V.width(150, "tube", default_w=None)
 
 
 def test_w_over_L_of_a_tube_is_its_diameter_over_its_length():

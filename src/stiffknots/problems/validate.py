@@ -30,7 +30,8 @@ MAX_ROUNDS = 100
 def integer(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
     """``value`` as an int in [lo, hi]; floats with an integer value are accepted."""
     ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
-    if not ok and isinstance(value, numbers.Real) and math.isfinite(value) and value == int(value):
+    if (not ok and not isinstance(value, bool) and isinstance(value, numbers.Real)
+            and math.isfinite(value) and value == int(value)):
         ok, value = True, int(value)
     if not ok or (lo is not None and value < lo) or (hi is not None and value > hi):
         raise InvalidParameter(name, value, _describe("an integer", lo, hi))
