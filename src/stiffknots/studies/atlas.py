@@ -44,11 +44,11 @@ from stiffknots.sweeps import (
     Budget,
     SweepListener,
     SweepResult,
-    Width,
     ensemble_converged,
     run_sweep,
     sweep_settings,
 )
+from stiffknots.width import Width
 
 __all__ = ["DEFAULT_OUT", "DEFAULT_DB", "bead_above_tube", "knot_records", "atlas_input",
            "json_entry", "family_study", "families_table", "eps_n2_points", "run_atlas",
