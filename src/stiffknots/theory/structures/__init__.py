@@ -35,7 +35,7 @@ from stiffknots.theory.structures.shooting import cage_shooting
 from stiffknots.theory.structures.solver import (
     ArcSpec,
     LevelSolution,
-    Structure,
+    StructureProblem,
     StructureResult,
     richardson,
     solve_structure,
@@ -43,7 +43,7 @@ from stiffknots.theory.structures.solver import (
 
 __all__ = [
     "ArcSpec",
-    "Structure",
+    "StructureProblem",
     "LevelSolution",
     "StructureResult",
     "STRUCTURE_NAMES",

@@ -34,12 +34,12 @@ import math
 
 import numpy as np
 
-from stiffknots.theory.structures.solver import ArcSpec, Structure
+from stiffknots.theory.structures.solver import ArcSpec, StructureProblem
 
 __all__ = ["CAGE_SIDES", "circular_braid", "eighty", "four_fold_cage", "point_braid_loops"]
 
 
-def circular_braid(i: int) -> Structure:
+def circular_braid(i: int) -> StructureProblem:
     """``CB(i)``: one closed line-braid of multiplicity ``i`` (§VI A, (eq. (30))).
 
     The start is a non-planar wobbly closed curve through a junction ``P`` (held at the origin
@@ -57,12 +57,12 @@ def circular_braid(i: int) -> Structure:
                               guess=crv),))
 
 
-def _one_node(name: str, description: str, node_name: str, arcs: tuple) -> Structure:
+def _one_node(name: str, description: str, node_name: str, arcs: tuple) -> StructureProblem:
     """A structure of arcs from and to one junction P, fixed at the origin with direction +x
     (the gauge: a rigid motion moves nothing else)."""
-    return Structure(name=name, description=description, node_names=(node_name,),
-                     node_guess=np.zeros((1, 3)), dir_guess=np.array([[1.0, 0.0, 0.0]]),
-                     arcs=arcs, fixed_nodes=(0,), fixed_dirs=(0,))
+    return StructureProblem(name=name, description=description, node_names=(node_name,),
+                            node_guess=np.zeros((1, 3)), dir_guess=np.array([[1.0, 0.0, 0.0]]),
+                            arcs=arcs, fixed_nodes=(0,), fixed_dirs=(0,))
 
 
 def _lemniscate(t: np.ndarray) -> np.ndarray:
@@ -70,7 +70,7 @@ def _lemniscate(t: np.ndarray) -> np.ndarray:
     return np.column_stack([np.cos(t) / d, np.sin(t) * np.cos(t) / d, np.zeros_like(t)])
 
 
-def eighty(contact: float = 0.5) -> Structure:
+def eighty(contact: float = 0.5) -> StructureProblem:
     """``80``: the figure-eight plus a circle joined at a point-braid (§VII).
 
     The 8 is one closed strand with a double point ``X`` (a multiple point where its two
@@ -115,7 +115,7 @@ def eighty(contact: float = 0.5) -> Structure:
         ArcSpec("8: X->P", 1, 0, 2, 1, 0, 1, weight=1, guess=p_arc3 + shift),
         ArcSpec("0: circle", 0, 0, 0, 1, 0, 1, weight=2, guess=circ + shift),
     )
-    return Structure(
+    return StructureProblem(
         name="80",
         description="80: a figure-eight (double point X) and a circle joined at a "
                     "point-braid P",
@@ -129,7 +129,7 @@ def eighty(contact: float = 0.5) -> Structure:
     )
 
 
-def point_braid_loops(n: int) -> Structure:
+def point_braid_loops(n: int) -> StructureProblem:
     """``PBL(n)``: ``2n`` loops at one point-braid (§VI A, Fig. knot_transformations e).
 
     Each loop leaves the point-braid ``P`` along one side of its axis and returns along the
@@ -160,7 +160,7 @@ CAGE_SIDES: tuple[tuple[int, int], ...] = ((1, 1), (1, -1), (-1, 1), (-1, -1))
 
 
 def four_fold_cage(axis_angle: float | None = None, *, radius: float = 1.0,
-                   start_angle: float = 90.0, twist: float = 0.0) -> Structure:
+                   start_angle: float = 90.0, twist: float = 0.0) -> StructureProblem:
     """``4C``: the 4-fold cage, two point-braids joined by four arcs (§VII, Fig. MC_braids b).
 
     Point-braid ``A`` (held at the origin, axis ``a`` held along ``x``: the gauge) and
@@ -215,7 +215,7 @@ def four_fold_cage(axis_angle: float | None = None, *, radius: float = 1.0,
         arcs.append(ArcSpec(f"arc ({'+' if sa > 0 else '-'}a, {'+' if sb > 0 else '-'}b)",
                             0, 1, 0, sa, 1, -sb, weight=1, guess=crv))
     b = np.array([math.cos(ang), math.sin(ang), 0.0])
-    return Structure(
+    return StructureProblem(
         name="4C",
         description="4-fold cage: point-braids A and B joined by four arcs of multiplicity 1",
         node_names=("A (point-braid)", "B (point-braid)"),

@@ -1,6 +1,6 @@
 """The w = 0 variational problem of a structure (§V B), solved numerically.
 
-A structure is described by a :class:`Structure` (its line-braids as :class:`ArcSpec`,
+A structure is described by a :class:`StructureProblem` (its line-braids as :class:`ArcSpec`,
 its junctions, a rough start and the gauge); :func:`solve_structure` minimises its energy
 (eq. (17)) at fixed length at doubling resolutions and extrapolates to the continuum. The
 named structures are in :mod:`stiffknots.theory.structures.named`.
@@ -58,7 +58,7 @@ __all__ = [
     "ArcSpec",
     "DiscreteProblem",
     "LevelSolution",
-    "Structure",
+    "StructureProblem",
     "StructureResult",
     "richardson",
     "solve_structure",
@@ -103,7 +103,7 @@ class ArcSpec:
 
 
 @dataclass(eq=False)
-class Structure:
+class StructureProblem:
     """The w = 0 problem of a structure: line-braids joined at point-braids and multiple points
     (§V B), with the rough start and the gauge :func:`solve_structure` minimises from.
 
@@ -169,7 +169,7 @@ class DiscreteProblem:
     relations and the gauge fixes.
     """
 
-    def __init__(self, s: Structure, K: int):
+    def __init__(self, s: StructureProblem, K: int):
         self.s = s
         self.K = K
         self.Kp = [a.weight * K for a in s.arcs]
@@ -607,7 +607,7 @@ class LevelSolution:
 class StructureResult:
     """Extrapolated energy of a structure and the solutions it came from."""
 
-    structure: Structure
+    structure: StructureProblem
     epsilon: float
     error: float
     extrapolation_error: float
@@ -625,14 +625,14 @@ class StructureResult:
         return self.levels[-1]
 
 
-def solve_structure(structure: Structure, Ks: Sequence[int] = (16, 32, 64, 128, 256),
+def solve_structure(structure: StructureProblem, Ks: Sequence[int] = (16, 32, 64, 128, 256),
                     *, coarse_K: int | None = None, orders: int = 3,
                     stability_K: int | None = None) -> StructureResult:
     """Minimise a structure's energy (eq. (17)) at fixed length and extrapolate ``K -> inf``.
 
     Parameters
     ----------
-    structure : Structure
+    structure : StructureProblem
     Ks : sequence of int
         Base resolutions, each twice the previous (arc ``p`` has ``weight_p K`` intervals).
     coarse_K : int, optional
