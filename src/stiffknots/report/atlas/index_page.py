@@ -87,9 +87,8 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
             ("width", "text", "", "the finite width the ε was computed at"),
             ("converged", "text", "",
              "whether two independent searches reached the lowest ε found (within 0.1 %): a "
-             "statement about the searches, not proof that no lower state exists — under the "
-             "bead rule at the default budget 9 of 21 verdicts checked against a deeper "
-             "search lay above its lowest (bench/RESULTS.md, 2026-12-05)"),
+             "statement about the searches, not proof that no lower state exists; how often "
+             "a deeper search found lower: docs/methods/verdicts.md"),
             ("metastable", "num", "", "the other states found: shape ×count (ε)"),
             ("d<sub>min</sub>", "num", "num",
              "minimum distance between non-adjacent segments of the ground state (the bead "
