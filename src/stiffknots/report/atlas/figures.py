@@ -1,5 +1,6 @@
-"""The pictures of the atlas: the thumbnail of a state, the tube of its 3D view, and the
-figure of ε against n² with the bounds of Gallotti & Pierre-Louis (PRE 2007, §IV, §VI A)."""
+"""The pictures of the atlas: the thumbnail of a state, the tube of its 3D view, the figure of
+ε against n² with the bounds of Gallotti & Pierre-Louis (PRE 2007, §IV, §VI A), and the badge
+of a shape class in its colour."""
 
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ from stiffknots.report.atlas.markup import esc, num
 from stiffknots.report.atlas.schema import KnotRow, natural_key
 from stiffknots.theory import closed_bounds
 
-__all__ = ["COLORSCALE", "ZONE_COLOURS", "eps_figure", "state_mesh", "thumbnail_png"]
+__all__ = ["COLORSCALE", "ZONE_COLOURS", "eps_figure", "shape_badge", "state_mesh",
+           "thumbnail_png"]
 
 #: Colours along the arclength of a closed tube: the cyclic map of
 #: :mod:`stiffknots.report.render` (no seam at bead 0), as a plotly colour scale.
@@ -219,3 +221,15 @@ def eps_figure(knots: list[KnotRow], models: list[tuple[str, str]],
         "paper_bgcolor": "#fff",
     }
     return {"data": traces, "layout": layout}
+
+
+def shape_badge(label: str | None, shape: str | None, extra: dict,
+                structure: str | None = None) -> str:
+    """The shape class as a coloured badge; its contact structure (§V B) as its tooltip."""
+    if label is None:
+        return "—"
+    from stiffknots.report.figures import shape_style
+
+    colour = shape_style(shape, extra)[1]
+    tip = f' title="{esc(structure)}"' if structure else ""
+    return f'<span class="shape" style="background:{esc(colour)}"{tip}>{esc(label)}</span>'

@@ -6,15 +6,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from stiffknots.report.atlas.markup import (
-    asset,
-    esc,
-    json_script,
-    num,
-    page_head,
-    shape_badge,
-    yes_no,
-)
+from stiffknots.report.atlas.figures import shape_badge
+from stiffknots.report.atlas.markup import asset, esc, json_script, num, page_head, yes_no
 from stiffknots.report.atlas.schema import KnotRow, ModelRow, natural_key
 from stiffknots.report.text import segment_distance_text
 

@@ -4,16 +4,8 @@ state."""
 from __future__ import annotations
 
 from stiffknots._version import __version__
-from stiffknots.report.atlas.figures import COLORSCALE, ZONE_COLOURS, state_mesh
-from stiffknots.report.atlas.markup import (
-    asset,
-    esc,
-    json_script,
-    num,
-    page_head,
-    shape_badge,
-    yes_no,
-)
+from stiffknots.report.atlas.figures import COLORSCALE, ZONE_COLOURS, shape_badge, state_mesh
+from stiffknots.report.atlas.markup import asset, esc, json_script, num, page_head, yes_no
 from stiffknots.report.atlas.schema import ZONE_KINDS, KnotRow, StateRow
 from stiffknots.report.text import segment_distance_text
 

@@ -1,5 +1,5 @@
 """The pieces of HTML both kinds of atlas page use: escaping, numbers, the page head with the
-style sheet, the shape badge, and the files of ``stiffknots/report/assets`` (the pages' CSS and
+style sheet, and the files of ``stiffknots/report/assets`` (the pages' CSS and
 scripts, inlined into every page so that it opens from disk)."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import Any
 
 from stiffknots._json import to_plain
 
-__all__ = ["asset", "esc", "json_script", "num", "page_head", "shape_badge", "yes_no"]
+__all__ = ["asset", "esc", "json_script", "num", "page_head", "yes_no"]
 
 
 @functools.cache
@@ -53,15 +53,3 @@ def page_head(title: str, prefix: str, extra_css: str) -> str:
         f"<style>\n{asset('atlas.css')}\n{extra_css}</style>\n"
         f"<script src=\"{prefix}plotly.min.js\"></script>\n</head>\n"
     )
-
-
-def shape_badge(label: str | None, shape: str | None, extra: dict,
-                structure: str | None = None) -> str:
-    """The shape class as a coloured badge; its contact structure (§V B) as its tooltip."""
-    if label is None:
-        return "—"
-    from stiffknots.report.figures import shape_style
-
-    colour = shape_style(shape, extra)[1]
-    tip = f' title="{esc(structure)}"' if structure else ""
-    return f'<span class="shape" style="background:{esc(colour)}"{tip}>{esc(label)}</span>'
