@@ -73,7 +73,7 @@ class Width:
         name = "d" if self.exclusion == "bead" else "w"
         t = self.thickness
         if not (isinstance(t, int | float) and math.isfinite(t) and 0 < t < 1):
-            raise InvalidParameter(name, t, "a number in (0, 1) bond lengths")
+            raise InvalidParameter(name, t, "a finite number in (0, 1)", "bond lengths")
         length = _length(int(self.beads), self.closed)
         if not math.isclose(self.w_over_L * length, t, rel_tol=1e-9):
             raise InvalidParameter("w_over_L", self.w_over_L,
@@ -189,4 +189,4 @@ class Width:
 def _check_thickness(name: str, t: Any) -> None:
     if isinstance(t, bool) or not (isinstance(t, int | float) and math.isfinite(t)
                                    and 0 < t < 1):
-        raise InvalidParameter(name, t, "a finite number in (0, 1) bond lengths")
+        raise InvalidParameter(name, t, "a finite number in (0, 1)", "bond lengths")

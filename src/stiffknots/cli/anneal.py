@@ -19,7 +19,6 @@ from stiffknots.cli.app import (
     ResumeOpt,
     SeedOpt,
     StartOpt,
-    UserError,
     check_interrupted,
     claim_checkpoint,
     count,
@@ -147,19 +146,18 @@ def anneal(
     from stiffknots.problems.closed_plan import plan_anneal
     from stiffknots.problems.pool import WorkerPool
 
-    initial = None if from_file is None else _read_curve(from_file)
     plan = plan_anneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
                        exclusion=exclusion, w=w, w_over_L=w_over_l, schedule=schedule,
                        rounds=rounds, t_start=t_start, t_end=t_end,
                        relax_fraction=relax_fraction, delta=delta, m_max=m_max,
                        checkpoint_dir=checkpoint, resume=resume, start=start, polish=polish,
-                       tube_route=tube_route, initial=initial, coarse=coarse)
+                       tube_route=tube_route, initial=from_file, coarse=coarse)
     # every input is checked (and the folders claimed) before any work
     checkpoint = claim_checkpoint(checkpoint, resume)
     out_dir = prepare_out(out_dir, overwrite)
     replicas, rounds, beads = plan.replicas, plan.rounds, plan.beads
     # the workers start now and import the solvers while this process builds the problem
-    coarse_d = None
+    coarse_d = fine_start = None
     with WorkerPool(default_workers(replicas)).start() as pool:
         if plan.coarse is not None:
             problem = plan.coarse_problem()
@@ -169,8 +167,8 @@ def anneal(
                              isolate=True, pool=pool)
             check_interrupted(cres, None)
             cs = plan.coarse_start(cres)
-            initial, coarse_d = cs.chain, cs.info
-        problem = plan.problem(initial)
+            fine_start, coarse_d = cs.chain, cs.info
+        problem = plan.problem(fine_start)
         if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
             # (the rounds that start new searches; a continuation's start is known only then)
             for rnd in range(min(rounds, problem.fresh_rounds)):
@@ -244,7 +242,8 @@ def anneal(
                   highlight=False)
     out.print(("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
-    if not res.converged and beads >= COARSE_HINT_FROM and coarse is None and initial is None:
+    if (not res.converged and beads >= COARSE_HINT_FROM and fine_start is None
+            and plan.initial is None):
         out.print(f"at N = {beads} a fresh search can miss the ground that a search at "
                   "N = 150 finds: try --coarse 150 (docs/methods/search.md)",
                   markup=False, highlight=False)
@@ -265,20 +264,3 @@ def anneal(
         out.print(f"results in {out_dir}/ (result.json, best.xyz, best.json, best.png)",
                   markup=False, highlight=False)
     finish(res, replicas, hint)
-
-
-def _read_curve(path: str):
-    """``--from FILE``: the closed curve in the file (any format of ``identify``)."""
-    from stiffknots.errors import ChainFormatError
-    from stiffknots.formats import load
-
-    if not path.strip():
-        raise UserError("--from must name a curve file, got ''")
-    try:
-        curve = load(path)
-    except ChainFormatError as exc:
-        raise UserError(f"--from {exc}") from None
-    if not curve.closed:
-        raise UserError(f"--from {path}: the curve was read as open; anneal takes a closed "
-                        "curve (a knot)")
-    return curve

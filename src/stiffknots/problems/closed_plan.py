@@ -38,6 +38,34 @@ SCHEDULE_CHOICES = ("auto", *SCHEDULES)
 COARSE_ROUNDS = 2
 
 
+def read_curve(path: str | Path) -> Chain:
+    """The closed curve in a file (any format of :func:`stiffknots.formats.load`), for
+    ``initial=``.
+
+    Raises
+    ------
+    ParameterConflict
+        No file name, an unreadable file, or a curve read as open; the message names the
+        parameter (``--from`` on the command line) and the file.
+    """
+    from stiffknots.errors import ChainFormatError
+    from stiffknots.formats import load
+
+    def esc(text) -> str:
+        return str(text).replace("{", "{{").replace("}", "}}")
+
+    if not str(path).strip():
+        raise ParameterConflict("{} must name a curve file, got ''", "initial")
+    try:
+        curve = load(path)
+    except ChainFormatError as exc:
+        raise ParameterConflict("{} " + esc(exc), "initial") from None
+    if not curve.closed:
+        raise ParameterConflict("{} " + esc(path) + ": the curve was read as open; anneal "
+                                "takes a closed curve (a knot)", "initial")
+    return curve
+
+
 def beads_for_knot(knot: Knot, w_over_L: float,  # noqa: N803
                    rel_error: float = V.DISCRETISATION_REL_ERROR) -> int:
     """The N rule at fixed w/L (:func:`~stiffknots.problems.validate.beads_for_width`) with
@@ -168,7 +196,8 @@ def plan_anneal(knot: Knot | str, *, beads: int | None = None, moves: int | None
                 m_max: int | None = None, checkpoint_dir: str | Path | None = None,
                 resume: bool = False, start: str | Sequence[str] = "all",
                 polish: bool = True, tube_route: bool = False,
-                initial: Chain | None = None, coarse: int | None = None) -> AnnealPlan:
+                initial: Chain | str | Path | None = None, coarse: int | None = None
+                ) -> AnnealPlan:
     """Check an ``anneal`` request and decide what runs.
 
     Parameters
@@ -187,7 +216,8 @@ def plan_anneal(knot: Knot | str, *, beads: int | None = None, moves: int | None
         the Langevin schedule, :data:`~stiffknots.problems.closed.DEFAULT_ROUNDS` otherwise).
     t_start, t_end, relax_fraction : the schedule's (None: its defaults at this N).
     delta, m_max : the Monte Carlo moves' (None: defaults).
-    initial : a closed curve every replica starts from (``knot`` is checked against it).
+    initial : a closed curve every replica starts from (``knot`` is checked against it), or
+        the file that holds it (:func:`read_curve`, read after every other check).
     coarse : anneal first at this many beads and start the fine run from the lowest chain
         (:meth:`AnnealPlan.coarse_start`).
     The others: :class:`~stiffknots.problems.closed.ClosedAnneal`.
@@ -266,6 +296,8 @@ def plan_anneal(knot: Knot | str, *, beads: int | None = None, moves: int | None
             raise ParameterConflict("{} keeps the tube's diameter w in bond units (a thicker "
                                     "knot at fewer beads); give {}, not {}", "coarse", "w",
                                     "w_over_L")
+    if isinstance(initial, str | Path):
+        initial = read_curve(initial)
     return AnnealPlan(knot=k, width=width, schedule=sch, chosen_by=chosen_by,
                       monte_carlo=monte_carlo, rounds=rounds, params=params, moves=moves,
                       replicas=replicas, seed=seed, start=start, polish=bool(polish),
