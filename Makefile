@@ -36,6 +36,7 @@ docs: $(STAMP)  ## the documentation site (docs/_build/html/index.html)
 	$(PY) scripts/docs_cli.py docs/cli.md
 	$(PY) bench/make_page.py docs/benchmarks.md
 	$(PY) scripts/check_links.py README.md docs
+	rm -rf docs/api  # the API stubs are regenerated: none left of a renamed module
 	$(PY) -m sphinx -W --keep-going -n -q -b html docs docs/_build/html
 
 clean:

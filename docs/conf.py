@@ -67,9 +67,11 @@ napoleon_use_keyword = False
 # the standard library cannot resolve, so nitpicky mode ignores them; references into
 # stiffknots itself are still checked.
 nitpick_ignore_regex = [
-    ("py:.*", r"(numpy|np|scipy|numba|matplotlib|plotly|typer|click|rich|distributed|dask"
-              r"|sqlite3|pathlib|collections|typing|concurrent|multiprocessing|threading"
-              r"|subprocess|io|os|enum|dataclasses|abc|types|datetime|signal|random|json)"
+    ("py:.*", r"(numpy|np|scipy|numba|matplotlib|mpl_toolkits|plotly|typer|click|rich"
+              r"|distributed|dask|mpmath|topoly|snappy|spherogram|database_knotinfo"
+              r"|knot_floer_homology|threadpoolctl|sqlite3|pathlib|collections|typing"
+              r"|concurrent|multiprocessing|threading|subprocess|io|os|enum|dataclasses|abc"
+              r"|types|datetime|signal|random|json|html|math|functools|itertools|re|time)"
               r"(\..*)?"),
     ("py:class", r"(int|float|str|bool|bytes|complex|object|list|dict|tuple|set|frozenset"
                  r"|type|callable|Callable|Iterable|Iterator|Sequence|Mapping|Any|None"
