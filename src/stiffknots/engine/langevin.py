@@ -11,8 +11,8 @@ distance — its schedule, T falling exponentially from ``t_start`` to ``t_end``
 passage guard that is proved in that module's docstring), settles it (blocks of 2,000 steps
 at ``t_end`` with friction γ = 1, until the chain below is admissible), then takes the chain
 back onto the exact model: every bond to unit length by min-norm Gauss–Newton corrections, a
-straight-line motion certified by the final minimiser's passage guard
-(:func:`stiffknots.engine.polish.passage_guard`), and the bead rule checked. The result is an
+straight-line motion certified by the passage guard that the final minimiser uses too
+(:func:`stiffknots.engine.guard.passage_guard`), and the bead rule checked. The result is an
 admissible chain of the same knot type for the final minimiser
 (:func:`stiffknots.engine.polish.polish`), which the problems apply after every replica.
 
@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
+from stiffknots.engine.guard import passage_guard
 from stiffknots.engine.langevin_kernel import run_dynamics
 from stiffknots.engine.prims import check_state, energy_chain, new_rng_state
 from stiffknots.errors import ChainGeometryError, InvalidParameter
@@ -197,8 +198,6 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
     ChainGeometryError
         The final chain could not be made admissible (never seen at the defaults).
     """
-    from stiffknots.engine.polish import passage_guard
-
     s = settings or LangevinSettings()
     s.validate(d)
     x = _check_start(coords, d).copy()
