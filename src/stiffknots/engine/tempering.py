@@ -21,7 +21,7 @@ tempering run costs the CPU time of one annealing run of the same ``moves`` and 
 compared per CPU-second (bench/RESULTS.md). Swap attempts and acceptances are counted per
 neighbour pair; the random numbers of the swaps come from their own xoshiro256+ stream, so a
 run is reproducible from its seed and can be checkpointed and resumed exactly like an
-annealing run (:mod:`stiffknots.engine.driver`).
+annealing run (:mod:`stiffknots.engine.checkpoints`).
 """
 
 from __future__ import annotations
@@ -32,22 +32,24 @@ from pathlib import Path
 import numpy as np
 
 from stiffknots.engine import prims as K
-from stiffknots.engine.driver import (
-    TRACE_KEYS,
-    AnnealSettings,
+from stiffknots.engine.checkpoints import (
     Checkpointer,
-    Clock,
-    ReplicaResult,
-    check_chain,
     check_resumable,
     load_checkpoint,
-    make_result,
     restore_state,
-    resync,
     run_meta,
     save_checkpoint,
     state_arrays,
 )
+from stiffknots.engine.driver import (
+    TRACE_KEYS,
+    Clock,
+    ReplicaResult,
+    check_chain,
+    make_result,
+    resync,
+)
+from stiffknots.engine.settings import AnnealSettings
 from stiffknots.engine.state import ChainState
 from stiffknots.errors import RunStopped
 
