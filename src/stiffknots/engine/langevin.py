@@ -2,9 +2,9 @@
 
 The crankshaft Monte Carlo of :mod:`stiffknots.engine.kernel` moves a few beads at a time.
 Some minima of the bead rule are reached far more easily by moving every bead at once: the
-4_1's lowest states (ε ≈ 127.4–127.6 at N = 150, two strands crossing 0.23 apart) are found
-by the peer's Langevin dynamics (LAMMPS, ``fix langevin``) in 2 of 3 seeds and by the
-crankshafts only after ≳ 10⁷ moves (bench/RESULTS.md). :func:`run_langevin` runs that
+4_1's lowest states (two strands crossing close together) are found by the peer's Langevin
+dynamics (LAMMPS, ``fix langevin``) far sooner than by the crankshafts
+(docs/methods/search.md). :func:`run_langevin` runs that
 dynamics in a compiled kernel (:func:`stiffknots.engine.langevin_kernel.run_dynamics`: the
 peer's model — stiff harmonic bonds, the bending energy E_d, a WCA wall at the contact
 distance — its schedule, T falling exponentially from ``t_start`` to ``t_end``, and a

@@ -18,7 +18,7 @@ the copy of lowest energy is quenched at T = 0 (``quench_fraction`` of the moves
 
 The move budget ``settings.moves`` is shared by the K copies (each gets about 1/K of it), so a
 tempering run costs the CPU time of one annealing run of the same ``moves`` and the two can be
-compared per CPU-second (bench/RESULTS.md). Swap attempts and acceptances are counted per
+compared per CPU-second (docs/methods/search.md). Swap attempts and acceptances are counted per
 neighbour pair; the random numbers of the swaps come from their own xoshiro256+ stream, so a
 run is reproducible from its seed and can be checkpointed and resumed exactly like an
 annealing run (:mod:`stiffknots.engine.checkpoints`).
