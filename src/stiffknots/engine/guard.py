@@ -1,6 +1,6 @@
 """The strand-passage guard of a straight-line motion: no two strands meet along a step (§II).
 
-The knot type of the chain is fixed (paper §II), so no step may pass one strand through
+The problem is posed for a given knot K (paper §II), so no step may pass one strand through
 another. A step of the final minimiser (:mod:`stiffknots.engine.polish`), and the projection
 that takes the Langevin search's chain onto unit bonds (:mod:`stiffknots.engine.langevin`),
 move every bead along the straight line r_i(t) = r_i + t(r'_i − r_i), t ∈ [0, 1];

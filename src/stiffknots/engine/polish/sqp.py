@@ -69,6 +69,9 @@ STALL_KKT = 1e-6
 
 
 class _Polisher:
+    """The SQP of the module docstring on one :class:`_Problem`: its measures, the KKT
+    residual, the projection, one QP step and the iteration (:meth:`run`)."""
+
     def __init__(self, prob: _Problem, max_step: float, guard: bool, zlo: float, zhi: float,
                  max_depth: int):
         self.p = prob
