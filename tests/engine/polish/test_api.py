@@ -1,8 +1,9 @@
-"""The final minimiser :func:`stiffknots.engine.polish.polish` (paper §VII, §VIII).
+"""The final minimiser's entry point :func:`stiffknots.engine.polish.polish` (§VII, §VIII).
 
 Analytic minima (regular polygon, m-covered circle), admissibility (unit bonds, exclusion
 rule), monotone energy, topology preservation on annealed tight knots and on random
-admissible perturbations of them, the strand-passage guard, and clamped open chains.
+admissible perturbations of them, no strand passage along the polish, and clamped open
+chains.
 """
 
 from __future__ import annotations
@@ -14,11 +15,11 @@ import numpy as np
 import pytest
 
 from stiffknots.engine import kernel as K
-from stiffknots.engine.polish import PolishResult, passage_guard, polish
+from stiffknots.engine.polish import PolishResult, polish
 from stiffknots.engine.state import ChainState, MoveParams
 from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
 
-DATA = Path(__file__).resolve().parent.parent / "data" / "analysis"
+DATA = Path(__file__).resolve().parents[2] / "data" / "analysis"
 D = 1 / math.sqrt(2)
 MODE = {"bead": 0, "tube": 1}
 
@@ -234,47 +235,7 @@ def test_fuzz_tube(tube_chains, knot):
         check_knot_polish(start, knot, "tube", max_iter=100)
 
 
-# ---- the strand-passage guard ----------------------------------------------------------------
-
-
-def crossing_loop():
-    """A closed 8-bead loop whose segment (0, 1) passes 0.2 above segment (4, 5)."""
-    return np.array([
-        [-0.5, 0.0, 0.1], [0.5, 0.0, 0.1], [1.5, 0.5, 0.1], [1.5, 1.5, 0.0],
-        [0.0, 0.5, -0.1], [0.0, -0.5, -0.1], [-1.5, -1.5, 0.0], [-1.5, -0.5, 0.1],
-    ])
-
-
-def test_guard_rejects_a_step_that_passes_a_strand_through_another():
-    old = crossing_loop()
-    push = np.zeros_like(old)
-    push[[0, 1], 2] = -0.4  # segment (0, 1) dives through segment (4, 5)
-    # the end state alone looks harmless: the segments are again 0.2 apart
-    assert K.min_nonadjacent_segment_distance(old + push) > 0.1
-    assert not passage_guard(old, old + push)
-    # shortened, the same motion stops short of the other strand and is accepted
-    assert passage_guard(old, old + 0.25 * push)
-    # a step that touches the other strand is rejected too
-    assert not passage_guard(old, old + 0.5 * push)
-
-
-def test_guard_accepts_rigid_motions_and_sliding():
-    old = crossing_loop()
-    # a rigid translation of the whole loop, far larger than the gap
-    assert passage_guard(old, old + np.array([3.0, -2.0, 7.0]))
-    # the upper strand slides along x, parallel to the lower one, without closing the gap
-    slide = np.zeros_like(old)
-    slide[[0, 1, 7], 0] = 0.3
-    assert passage_guard(old, old + slide)
-
-
-def test_guard_rejects_a_bead_swept_across_its_neighbours_bond():
-    old = crossing_loop()
-    mid = 0.5 * (old[7] + old[0])  # middle of the bond (7, 0)
-    new = old.copy()
-    new[1] = mid + 0.5 * (mid - old[1])  # bead 1's straight path crosses that bond
-    assert not passage_guard(old, new)
-    assert passage_guard(old, old + 0.25 * (new - old))
+# ---- no strand passage along the polish -------------------------------------------------------
 
 
 def test_polish_never_accepts_a_passage():
@@ -341,161 +302,3 @@ def test_bad_inputs_are_refused_with_a_message():
         polish(crumpled, exclusion="bead")
 
 
-def test_stall_stop_is_the_minimum_to_far_below_its_promise(monkeypatch):
-    # a 3_1 circular braid crawls for tens of steps after its energy has settled; the stall
-    # stop ends there, converged, at the energy the crawl would reach to ≤ 1e-9 relative
-    import stiffknots.engine.polish as P
-
-    x = fixture_chain("3_1_seed1_r0")
-    fast = polish(x)
-    assert fast.converged and fast.relative_kkt <= P.STALL_KKT
-    monkeypatch.setattr(P, "STALL_STEPS", 10**9)  # no stall stop: run to the KKT tolerance
-    slow = polish(x)
-    assert fast.iterations <= slow.iterations
-    assert fast.energy == pytest.approx(slow.energy, rel=1e-9)
-    assert fast.energy <= fast.energy_before
-
-
-@pytest.mark.parametrize("reg", [0.0, 1e-12])
-def test_kkt_matrix_is_the_block_matrix(reg):
-    """The KKT matrix assembled from the blocks' triplets is [h aᵀ; a −reg·I] entry by
-    entry (the polish factorises it; sp.bmat built the same matrix before)."""
-    import scipy.sparse as sp
-
-    from stiffknots.engine.polish import _kkt_matrix
-
-    h = sp.random(90, 90, density=0.05, random_state=1, format="csr")
-    h = (h + h.T + sp.identity(90)).tocsr()
-    a = sp.random(31, 90, density=0.05, random_state=2, format="csr")
-    lower = -reg * sp.identity(31) if reg > 0 else None
-    want = sp.bmat([[h, a.T], [a, lower]], format="csc")
-    got = _kkt_matrix(h, a, reg)
-    assert got.format == "csc" and got.shape == (121, 121) and got.nnz == want.nnz
-    assert abs(got - want).max() == 0.0
-
-
-@pytest.mark.parametrize("exclusion", ["bead", "tube"])
-def test_jacobian_rows_are_the_constraint_gradients(exclusion):
-    """The polish's Jacobian (assembled from triplets) holds ∇(|b_k|² − 1) for every bond
-    and ∇g_p for every exclusion piece near contact, by central differences on a tight 5_2
-    state, and the six gauge rows where asked for."""
-    from stiffknots.engine.polish import EXCLUSIONS, _Problem
-
-    x = fixture_chain("5_2_seed1_r1")
-    n = len(x)
-    prob = _Problem(n, True, EXCLUSIONS.index(exclusion), 1 / np.sqrt(2), 0, False, 0.0)
-    cons = prob.candidates(x, 0.3)
-    assert len(cons) > 10, "no piece near contact: the test tested nothing"
-    _, b = prob.bond_residual(x)
-    _, _, wts, direc = cons.evaluate(x)
-    jac = prob.jacobian(x, b, cons.idx, wts, direc, rigid=False).toarray()
-    assert jac.shape == (n + len(cons), 3 * n)
-
-    def values(y):
-        return np.r_[prob.bond_residual(y)[0], cons.evaluate(y)[1]]
-
-    h = 1e-6
-    num = np.empty_like(jac)
-    for col in range(3 * n):
-        e = np.zeros(3 * n)
-        e[col] = h
-        num[:, col] = (values(x + e.reshape(n, 3)) - values(x - e.reshape(n, 3))) / (2 * h)
-    np.testing.assert_allclose(jac, num, atol=1e-6)
-    gauge = prob.jacobian(x, b, cons.idx, wts, direc, rigid=True)
-    assert gauge.shape == (n + 6 + len(cons), 3 * n)
-    np.testing.assert_array_equal(gauge[n:n + 6].toarray(), prob.rigid_rows(x).toarray())
-    np.testing.assert_array_equal(gauge[n + 6:].toarray(), jac[n:])
-
-
-@pytest.mark.parametrize("exclusion", ["bead", "tube"])
-@pytest.mark.parametrize("dense_rows", [0, 10**6], ids=["sparse-gram", "dense-gram"])
-def test_min_norm_solver_is_the_projection_kkt_solution(monkeypatch, exclusion, dense_rows):
-    """The projection's correction dx = Aᵀ(AAᵀ)⁻¹r (dense Cholesky or sparse LU of the Gram
-    matrix) equals the solution of the full KKT system [I Aᵀ; A 0][dx; y] = [0; r] it
-    replaced, on a tight 5_2 state with pieces near contact and a clamped open end."""
-    import scipy.sparse as sp
-
-    import stiffknots.engine.polish as P
-
-    monkeypatch.setattr(P, "DENSE_GRAM_ROWS", dense_rows)
-    x = fixture_chain("5_2_seed1_r1")
-    for closed, nfix in ((True, 0), (False, 2)):
-        prob = P._Problem(len(x), closed, P.EXCLUSIONS.index(exclusion), 1 / np.sqrt(2), nfix,
-                          False, 0.0)
-        cons = prob.candidates(x, 0.3)
-        _, _, wts, direc = cons.evaluate(x)
-        # independent rows: the bonds and every third piece (neighbouring pieces of one
-        # contact can be dependent, where only the regularised systems agree)
-        sel = np.arange(0, len(cons), 3)
-        assert len(sel) > 5, "no piece near contact: the test tested nothing"
-        _, b = prob.bond_residual(x)
-        a = prob.jacobian(x, b, cons.idx[sel], wts[sel], direc[sel], rigid=False)
-        rhs = a @ np.random.default_rng(1).normal(size=a.shape[1]) * 1e-3  # consistent
-        nf3 = 3 * prob.nf
-        lu = P._factor_kkt(sp.identity(nf3, format="csr"), a)
-        want = lu.solve(np.r_[np.zeros(nf3), rhs])[:nf3].reshape(-1, 3)
-        solver = P._MinNormSolver(prob, b, cons.idx[sel], wts[sel], direc[sel])
-        got = solver.solve(rhs)
-        assert got.shape == (prob.nf, 3)
-        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
-        np.testing.assert_allclose(a @ got.ravel(), rhs, rtol=0, atol=1e-12)
-
-
-@pytest.mark.parametrize("dense_rows", [0, 10**6], ids=["sparse-gram", "dense-gram"])
-def test_a_singular_kkt_matrix_prints_nothing(capfd, monkeypatch, dense_rows):
-    # a tube-model 3_1 whose polish meets an exactly singular KKT matrix (dependent pieces):
-    # SuperLU printed "** On entry to DTRSV parameter number 6 had an illegal value" on C's
-    # stdout before raising the error that the regularised retry handles. The projection's
-    # Gram matrix AAᵀ is singular there too: factorised sparse (SuperLU) or dense (Cholesky,
-    # which raises), it is regularised and the polish converges either way.
-    import stiffknots.engine.polish as P
-
-    monkeypatch.setattr(P, "DENSE_GRAM_ROWS", dense_rows)
-
-    x = np.load(DATA.parent / "polish" / "3_1_tube_singular_kkt.npy")
-    singular = []
-    real_lu, real_cho = P.splu, P.scipy.linalg.cho_factor
-
-    def counting_lu(k):
-        try:
-            return real_lu(k)
-        except RuntimeError:
-            singular.append(("lu", k.shape))
-            raise
-
-    def counting_cho(g, **kw):
-        try:
-            return real_cho(g, **kw)
-        except np.linalg.LinAlgError:
-            singular.append(("cholesky", g.shape))
-            raise
-
-    monkeypatch.setattr(P, "splu", counting_lu)
-    monkeypatch.setattr(P.scipy.linalg, "cho_factor", counting_cho)
-    r = polish(x, exclusion="tube")
-    monkeypatch.undo()
-    kinds = {k for k, _ in singular}
-    assert kinds >= ({"lu"} if dense_rows == 0 else {"cholesky"}), singular
-    assert singular, "the fixture no longer meets a singular matrix"
-    out, err = capfd.readouterr()
-    assert "On entry to" not in out + err
-    assert r.converged and r.energy < r.energy_before
-    assert r.max_bond_error < 1e-10 and r.exclusion_margin >= 0
-
-
-def test_held_diagnostics_restore_the_descriptors_with_threads():
-    # threads that factorise at once share one redirection of fds 1 and 2: none may save
-    # another's /dev/null and leave the process without its output
-    import os
-    import threading
-
-    x = np.load(DATA.parent / "polish" / "3_1_tube_singular_kkt.npy")
-    before = [os.path.realpath(f"/proc/self/fd/{fd}") for fd in (1, 2)]
-    threads = [threading.Thread(target=polish, args=(x,), kwargs={"exclusion": "tube"})
-               for _ in range(3)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    assert [os.path.realpath(f"/proc/self/fd/{fd}") for fd in (1, 2)] == before
-    assert "/dev/null" not in before
