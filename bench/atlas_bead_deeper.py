@@ -2,7 +2,7 @@
 
     stiffknots atlas --knots K1,K2,... --models bead --replicas 4 --bead-steps 3e6 --seed 1 \\
         --db DEEP.db --out DIR
-    python bench/atlas_bead_deeper.py ATLAS.db DEEP.db [--json FILE]
+    python bench/atlas_bead_deeper.py ATLAS.db DEEP.db [--json [FILE]]
 
 ``ATLAS.db`` holds a default-budget atlas (bead rule: Langevin replicas of 10⁶ steps, up to
 16, plus the replicas seeded from the tube replicas); ``DEEP.db`` other bead-rule replicas of
@@ -29,6 +29,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 
 from atlas_replay import capped_copy, verdicts  # noqa: E402
+from benchmeta import run_meta, stable_path  # noqa: E402
 from stiffknots.sweeps.cross import OLDER_SEEDED_REPLICA  # noqa: E402
 
 SHIFT = 100  # the deeper replicas' numbers in the pooled copy: r + SHIFT (above any cap)
@@ -87,7 +88,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("atlas")
     ap.add_argument("deep")
-    ap.add_argument("--json", default=None)
+    ap.add_argument("--json", nargs="?", const=str(stable_path("atlas_bead_deeper")),
+                    help="also write the result to FILE (default: bench/atlas_bead_deeper.json)")
     a = ap.parse_args(argv)
     deep = sqlite3.connect(a.deep)
     knots = sorted(r[0] for r in deep.execute(
@@ -131,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {name}: converged {v['converged']} of {v['knots']}; not: "
               f"{', '.join(v['not_converged']) or 'none'}")
     if a.json:
-        Path(a.json).write_text(json.dumps(out, indent=1) + "\n")
+        Path(a.json).write_text(json.dumps({"meta": run_meta(argv), **out}, indent=1) + "\n")
     return 0
 
 

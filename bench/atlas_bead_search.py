@@ -2,7 +2,7 @@
 annealing against the Langevin dynamics (``Budget.bead_search``).
 
     python bench/atlas_bead_search.py --db DB [--knots 9_1,9_7,...] [--cap 16]
-                                      [--replay 4,6,8,10,12] [--compare-only] [--json FILE]
+                                      [--replay 4,6,8,10,12] [--compare-only] [--json [FILE]]
 
 Step 1 sweeps the knots under both models with the default budget's bead ensembles annealing
 (2 × 15 M moves, up to 6, tube legs as usual); step 2 sweeps them again on the same database
@@ -32,6 +32,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from atlas_replay import capped_copy  # bench/, beside this script
+from benchmeta import run_meta, stable_path
 from stiffknots.store import settings_hash
 from stiffknots.store.keys import knot_sort_key
 from stiffknots.store.sqlite import Store
@@ -110,7 +111,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cap", type=int, default=16, help="most Langevin bead replicas")
     ap.add_argument("--replay", default="", help="caps to replay, e.g. 4,6,8")
     ap.add_argument("--compare-only", action="store_true")
-    ap.add_argument("--json", help="also write the comparison to this file")
+    ap.add_argument("--json", nargs="?", const=str(stable_path("atlas_bead_search")),
+                    help="also write the comparison to FILE "
+                         "(default: bench/atlas_bead_search.json)")
     a = ap.parse_args(argv)
     knots = [k.strip() for k in a.knots.split(",") if k.strip()]
     models = parse_models("bead,tube")
@@ -146,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"cap {r['cap']:2d}: {r['search']:9s} converged {r['converged']}, own CPU "
               f"{r['own_cpu_seconds']:.0f} s")
     if a.json:
-        Path(a.json).write_text(json.dumps(d, indent=1) + "\n")
+        Path(a.json).write_text(json.dumps({"meta": run_meta(argv), **d}, indent=1) + "\n")
     return 0
 
 

@@ -1,6 +1,6 @@
 """Two atlas databases of the same knots, their bead-rule ensembles compared cap by cap.
 
-    python bench/atlas_compare.py A.db B.db [--bead-caps 2,4,6,8,16] [--json FILE]
+    python bench/atlas_compare.py A.db B.db [--bead-caps 2,4,6,8,16] [--json [FILE]]
 
 A and B are two sweeps of the same knots that differ in the bead rule's search (for example
 the default 10⁶ Langevin steps a replica against ``--bead-steps 3e6``), their tube replicas
@@ -28,6 +28,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 
 from atlas_replay import capped_copy  # noqa: E402
+from benchmeta import run_meta, stable_path  # noqa: E402
 from stiffknots.store.sqlite import Store  # noqa: E402
 from stiffknots.sweeps.convergence import ensemble_converged  # noqa: E402
 
@@ -93,7 +94,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("a")
     ap.add_argument("b")
     ap.add_argument("--bead-caps", default="2,4,6,8,10,12,16")
-    ap.add_argument("--json", default=None)
+    ap.add_argument("--json", nargs="?", const=str(stable_path("atlas_compare")),
+                    help="also write the comparison to FILE (default: bench/atlas_compare.json)")
     args = ap.parse_args(argv)
     caps = [int(c) for c in args.bead_caps.split(",") if c.strip()]
     out = compare(args.a, args.b, caps)
@@ -106,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
             f"({len(row[name]['wrong'])} above the other's lowest), bead CPU "
             f"{row[name]['cpu_seconds']:.0f} s" for name in ("a", "b")))
     if args.json:
-        Path(args.json).write_text(json.dumps(out, indent=1) + "\n")
+        Path(args.json).write_text(json.dumps({"meta": run_meta(argv), **out}, indent=1) + "\n")
     return 0
 
 

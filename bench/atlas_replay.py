@@ -2,7 +2,7 @@
 
     python bench/atlas_replay.py DB [--bead-caps 4,6,8,10,12,16] [--tube-caps 2,4,6]
                                     [--legs 0,1,2] [--bead-legs 0,4] [--wall-per-cpu F]
-                                    [--json FILE]
+                                    [--json [FILE]]
 
 A sweep's replicas are a prefix: replica r's seed and start depend only on the replicas
 before it (``stiffknots.sweeps.plan``), and a (knot, model) gets two more replicas while it
@@ -42,6 +42,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from benchmeta import run_meta, stable_path
 from stiffknots.store.sqlite import Store
 from stiffknots.sweeps import BUDGETS
 from stiffknots.sweeps.convergence import ensemble_converged
@@ -140,7 +141,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="the stored sweep's tube legs (default: the default budget's)")
     ap.add_argument("--wall", type=float, help="the stored sweep's wall minutes")
     ap.add_argument("--wall-per-cpu", type=float)
-    ap.add_argument("--json")
+    ap.add_argument("--json", nargs="?", const=str(stable_path("atlas_replay")),
+                    help="also write the replays to FILE (default: bench/atlas_replay.json)")
     a = ap.parse_args(argv)
     base = verdicts(a.db)
     cpu_all = sum(m["cpu_seconds"] for m in base.values())
@@ -169,7 +171,8 @@ def main(argv: list[str] | None = None) -> int:
                           f"{r['knots']}, CPU {cpu:8.0f} s (bead {r['bead_cpu']:.0f}, tube "
                           f"{r['tube_cpu']:.0f}), ≈ {r['wall_hours']:.2f} h wall", flush=True)
     if a.json:
-        Path(a.json).write_text(json.dumps({"db": a.db, "wall_per_cpu": f, "stored": base,
+        Path(a.json).write_text(json.dumps({"meta": run_meta(argv), "db": a.db,
+                                            "wall_per_cpu": f, "stored": base,
                                             "replays": rows}, indent=1) + "\n")
     return 0
 

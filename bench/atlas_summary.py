@@ -1,21 +1,20 @@
 """What a sweep's database holds: replicas, CPU, verdicts by crossing number, and how far apart
 the two best replicas of each ground shape are.
 
-    python bench/atlas_summary.py [results/stiffknots.db] [--json FILE] [--structures]
+    python bench/atlas_summary.py [results/stiffknots.db] [--json [FILE]] [--structures]
 
-Reads the store only (any sweep: ``stiffknots atlas``). Per model (bead rule, tube): the
-(knot, model) pairs, the replicas and their CPU/wall seconds, the converged verdicts of
+Reads the store only (any sweep: ``stiffknots atlas``). Per model (bead rule, tube): the (knot,
+model) pairs, the replicas and their CPU/wall seconds, the converged verdicts of
 :mod:`stiffknots.sweeps.convergence` (≥ 2 replicas of the ground shape within 0.1 % of its
-lowest ε) by crossing number, the pairs not converged, and the distribution of the relative
-gap between the lowest replica of the ground shape and the next one of that shape — the gap
-the verdict's 0.1 % must bridge (README, "Bead rule against tube"); per conjectured family (and
-for the knots in none) the ground shapes and the contact structures of the grounds (§V B:
+lowest ε) by crossing number, the pairs not converged, and the distribution of the relative gap
+between the lowest replica of the ground shape and the next one of that shape — the gap the
+verdict's 0.1 % must bridge (docs/atlas.md, "Bead rule against tube"); per conjectured family
+(and for the knots in none) the ground shapes and the contact structures of the grounds (§V B:
 line-braids, point-braids, multiple points; ``--structures`` lists each structure's knots with
 their Conway notation); and the replicas whose strands touch where they cross (min segment
 distance below 10⁻³: the bead rule's touching crossings, held at the polish's strand gap),
-searches of the model's own and seeded ones apart, with how far above their knot's lowest
-state they end. Every number is at the stored
-width (N and d or w/L, printed).
+searches of the model's own and seeded ones apart, with how far above their knot's lowest state
+they end. Every number is at the stored width (N and d or w/L, printed).
 """
 
 from __future__ import annotations
@@ -26,6 +25,7 @@ import json
 import re
 import sys
 
+from benchmeta import run_meta, stable_path
 from stiffknots.knots.catalogue import get_knot
 from stiffknots.knots.families import families_of, predicted_shape
 from stiffknots.report.text import TOUCHING_BELOW
@@ -139,8 +139,8 @@ TWO_LINE_BRAIDS = "2 line-braids (m = 2) + double point"
 def two_long_boxes(grounds: list[dict]) -> dict:
     """Per model: the rational knots (Conway notation ``[a b c …]``, one digit a box) with
     exactly two twist boxes of ≥ 3 crossings, and how many of their grounds are two
-    line-braids of m = 2 joined at a double point (README, "Naming what the families
-    miss")."""
+    line-braids of m = 2 joined at a double point (docs/atlas.md, "Naming what the
+    families miss")."""
     out: dict = {}
     for g in grounds:
         m = re.fullmatch(r"\[(\d+)\]", get_knot(g["knot"]).conway_notation or "")
@@ -159,7 +159,8 @@ def _mean(xs: list[float]) -> float | None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("db", nargs="?", default="results/stiffknots.db")
-    ap.add_argument("--json", help="also write the summary to this file")
+    ap.add_argument("--json", nargs="?", const=str(stable_path("atlas_summary")),
+                    help="also write the summary to FILE (default: bench/atlas_summary.json)")
     ap.add_argument("--structures", action="store_true",
                     help="list the knots of every ground structure, per family")
     a = ap.parse_args(argv)
@@ -226,7 +227,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"\nground structure the same in both models: {sb['same']} of {sb['knots']} knots")
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
-            json.dump(s, fh, indent=1, ensure_ascii=False)
+            json.dump({"meta": run_meta(argv), **s}, fh, indent=1, ensure_ascii=False)
             fh.write("\n")
     return 0
 

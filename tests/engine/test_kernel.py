@@ -8,7 +8,6 @@ import pytest
 
 from helpers import braid_chain
 from stiffknots.engine import kernel as K
-from stiffknots.engine.driver import AnnealSettings, run_replica
 from stiffknots.engine.schedules import Schedule
 from stiffknots.engine.state import ChainState, MoveParams
 from stiffknots.knots.identify import identify
@@ -125,15 +124,6 @@ def test_topology_preserved_fast(temperature, m_law):
 def test_topology_fuzz_1e7(exclusion, temperature):
     params = MoveParams(p_single=0.5, m_max=60, l_cap=1.0, phi_max=1.5, exclusion=exclusion)
     _fuzz("5_2", temperature, 10_000_000, params, seed=2)
-
-
-def test_driver_verifies_and_records():
-    res = run_replica(chain("3_1"), AnnealSettings(moves=400_000, n_chunks=20), seed=5)
-    assert res.energy == pytest.approx(res.energy_recomputed)
-    assert res.max_bond_error < 1e-10
-    assert res.exclusion_margin >= 0
-    assert len(res.trace_epsilon) == 30
-    assert res.epsilon >= 2 * math.pi**2 * 4 * 0.99  # lower bound 2π²n², n = 2 (discrete)
 
 
 @pytest.mark.parametrize("m_max", [2, 3, 75, 300, 5000])

@@ -11,6 +11,7 @@ import pytest
 from tests.helpers import braid_chain
 
 from stiffknots.engine.driver import AnnealSettings
+from stiffknots.engine.guard import passage_guard
 from stiffknots.engine.langevin import (
     LangevinSettings,
     project_bonds,
@@ -20,7 +21,6 @@ from stiffknots.engine.langevin import (
 )
 from stiffknots.engine.langevin_kernel import _build_pairs, forces, guard_distance, run_dynamics
 from stiffknots.engine.params import MoveParams
-from stiffknots.engine.polish import passage_guard
 from stiffknots.engine.prims import check_state, new_rng_state
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter

@@ -1,33 +1,18 @@
 """The run loop: one replica = a plan of chunks run on one state, verified (paper §VII).
 
 The driver composes the state (:mod:`stiffknots.engine.state`, any ensemble) with a *plan*: a
-fixed list of chunks (moves, temperature) made from the settings alone (:func:`plan_steps`).
-It knows arrays and numbers only. Every ensemble — a closed chain, an open chain at fixed
-extension or at fixed force — and every plan runs through this one loop, with the same
-checkpoints, traces and verification; replica exchange (:mod:`stiffknots.engine.tempering`)
-builds on the same pieces.
+fixed list of chunks (moves, temperature) made from the settings alone
+(:mod:`stiffknots.engine.plans`). It knows arrays and numbers only. Every ensemble — a closed
+chain, an open chain at fixed extension or at fixed force — and every plan runs through this
+one loop, with the same checkpoints (:mod:`stiffknots.engine.checkpoints`), traces and
+verification; replica exchange (:mod:`stiffknots.engine.tempering`) builds on the same pieces.
 
-Plans
------
-``anneal`` (the default): two stages, each ending with a T = 0 quench (see
-:mod:`stiffknots.engine.schedules`): a low-temperature relaxation of the starting chain, then
-the annealing from a hot start; optionally followed by basin hops (``Schedule.hops``), each
-restarting from the lowest chain so far. The result is the lowest candidate: the quenched
-chain of each stage — with hops, the quenched chain taken to its local minimum by the final
-minimiser (:func:`_candidate`), and the starting chain too, so that a run that continues a
-search never ends above its start.
-
-No step passes a strand through another: the moves are guarded (:mod:`.kernel`), the
-minimiser is guarded (:mod:`.polish`), and a hop's restart puts back a chain this same run
-reached before by those steps — a jump between two chains of one passage-free trajectory,
-so of one knot type (and the type of every result is verified again by the problems layer).
-
-``tight`` (the restricted-curvature search of §IX D): a continuation in p of the energy
-Σ((1 − cos θ)/s)^p — p = 1 is the bending energy annealed with the schedule, then each higher
-p re-seeds the generator, takes s from the 90th percentile of the current turning angles and
-anneals geometrically from 10⁻² to 10⁻⁵ times the energy per bead at its start — and a final
-ratchet quench whose curvature limit θ_max follows the largest turning angle down after every
-chunk.
+With basin hops a stage's candidate is its quenched chain taken to its local minimum by the
+final minimiser (:func:`_candidate`). No step passes a strand through another: the moves are
+guarded (:mod:`.kernel`), the minimiser is guarded (:mod:`.polish`), and a hop's restart puts
+back a chain this same run reached before by those steps — a jump between two chains of one
+passage-free trajectory, so of one knot type (and the type of every result is verified again
+by the problems layer).
 
 Energy bookkeeping
 ------------------
@@ -36,146 +21,56 @@ and then replaced by it. The comparison allows 1e-9 of the largest energy the ch
 (|E| at its start or end, at least 1): the rounding error of a sum of increments is relative
 to the magnitudes summed, and in the power energy of the ``tight`` plan a chunk can start at
 E ~ 10¹¹ and end at E ~ 30, so a tolerance relative to the final energy alone fails on
-correct runs (1.3e-6 relative was seen), while a real bookkeeping error — a joint missed by a
-move — is of the order of the joint energies. Inside a chunk the power energy's increments
-can still dwarf both ends (a move that bends a joint 3× its neighbours' angle raises its
-term 3¹⁶-fold and the next move takes it back): the unknot's tight state, a circle of tiny
-energy, showed rounding of 1.75e-9, so the power energy is allowed 1e-7 (the bending energy
-stays at 1e-9; it showed ≤ 7e-14). The replacement stops rounding errors from
-accumulating over chunks. It never changes a move's decision (those depend on energy
-differences only).
-
-Checkpoints
------------
-A long run can write its whole state to one ``.npz`` file every K chunks and/or every S
-seconds (positions, generator state, counters, incremental energies, chunk index, traces, best
-chain so far, the current energy parameters and curvature limit, settings, seed, version) and
-be resumed from it. The plan depends on the settings only and the kernels' results do not
-depend on the order of their cell lists, so a resumed run ends with *exactly* the chain and
-energy of an uninterrupted run with the same seed (only the wall-clock traces differ). A
-checkpoint is only resumed by a run with the same settings, seed, replica index, starting
-chain and package version; anything else, and any corrupt file, raises
-:class:`~stiffknots.errors.CheckpointError`.
+correct runs, while a real bookkeeping error — a joint missed by a move — is of the order of
+the joint energies. Inside a chunk the power energy's increments can still dwarf both ends (a
+move that bends a joint 3× its neighbours' angle raises its term 3¹⁶-fold and the next move
+takes it back), so the power energy is allowed 1e-7 (docs/architecture.md). The replacement
+stops rounding errors from accumulating over chunks. It never changes a move's decision
+(those depend on energy differences only).
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 import os
 import time
-import zipfile
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from stiffknots._version import __version__
-from stiffknots.engine.params import Ensemble, MoveParams
-from stiffknots.engine.prims import min_nonadjacent_segment_distance, turning_cosines
-from stiffknots.engine.schedules import Schedule
+from stiffknots.engine.checkpoints import (
+    Checkpointer,
+    check_resumable,
+    load_checkpoint,
+    restore_state,
+    run_meta,
+    save_checkpoint,
+    state_arrays,
+)
+from stiffknots.engine.params import MoveParams
+from stiffknots.engine.plans import TIGHT_SEED_STRIDE, Step, plan_steps, stage_params
+from stiffknots.engine.prims import min_nonadjacent_segment_distance
+from stiffknots.engine.settings import AnnealSettings
 from stiffknots.engine.state import ChainState, check_open_clamping
 from stiffknots.errors import (
     ChainGeometryError,
-    CheckpointError,
     EnergyBookkeepingError,
-    InvalidParameter,
     RunStopped,
 )
-from stiffknots.fileio import atomic_path
 
 __all__ = ["AnnealSettings", "Clock", "ReplicaResult", "Step", "plan_steps", "polishable",
            "run_replica", "replica_seeds"]
 
-CHECKPOINT_FORMAT = 2
-QUENCH_CHUNKS = 10
-PLANS = ("anneal", "tight")
-DEFAULT_POWERS = (1, 2, 4, 8, 16, 32, 64)
-TIGHT_CHUNKS = 100  # chunks per power of the ``tight`` plan
-RATCHET_CHUNKS = 20  # chunks of its final ratchet quench
-TIGHT_SEED_STRIDE = 7919  # stage k of the ``tight`` plan re-seeds with seed + 7919·k
 BOOKKEEPING_RTOL = 1e-9
 #: the same for the ``power`` energy of the tight plan: its terms ((1 − cos θ)/s)^p rise so
-#: steeply that one move's increment can be ~10⁶ times the chunk's final energy; measured on
-#: tightest 0_1 and 3_1 (100 k moves, 4 seeds each): rounding up to 1.75e-9 of the energy
-#: (the bending energy: ≤ 7e-14). A missed joint is an error of order E/N (≈ 10⁻²).
+#: steeply that one move's increment can be ~10⁶ times the chunk's final energy, and its
+#: rounding stays far below a missed joint's error, of order E/N (docs/architecture.md)
 BOOKKEEPING_RTOL_POWER = 1e-7
 HOP_POLISH_ITER = 30  # steps of the final minimiser that ranks a basin hop's chain
 TRACE_KEYS = ("moves", "temperature", "epsilon", "seconds")
-
-
-@dataclass
-class AnnealSettings:
-    """Everything that defines a replica's run besides its starting chain and seed.
-
-    Attributes
-    ----------
-    moves : attempted moves of the whole run.
-    schedule : the temperature schedule (:class:`Schedule`).
-    params : moves, exclusion and energy (:class:`MoveParams`).
-    quench_fraction : fraction of each stage's moves spent in its T = 0 quench (``anneal``).
-    n_chunks : chunks of the annealing (a chunk is the unit of traces and checkpoints).
-    target_epsilon : record the wall and CPU seconds at which ε first falls to this value.
-    ensemble : closed chain, open chain at fixed extension or at fixed force (:class:`Ensemble`).
-    plan : ``"anneal"`` or ``"tight"`` (see the module docstring).
-    powers : the powers p of the ``tight`` plan's continuation.
-
-    The defaults (``moves``, :class:`Schedule`, :class:`MoveParams`) are the measured winners of
-    bench/RESULTS.md: 15 M moves, of which the first 40 % relax the starting chain
-    (t = 5e-5 → 1e-7) and the rest anneal geometrically from t = 0.1 to 1e-6 (§VII).
-    """
-
-    moves: int = 15_000_000
-    schedule: Schedule = field(default_factory=Schedule)
-    params: MoveParams = field(default_factory=MoveParams)
-    quench_fraction: float = 0.1
-    n_chunks: int = 200
-    target_epsilon: float | None = None
-    ensemble: Ensemble = field(default_factory=Ensemble)
-    plan: str = "anneal"
-    powers: tuple[int, ...] = DEFAULT_POWERS
-
-    @property
-    def closed(self) -> bool:
-        return self.ensemble.closed
-
-    def validate(self) -> None:
-        if self.moves < 1000:
-            raise ValueError(f"moves must be ≥ 1000, got {self.moves}")
-        if not 0 <= self.quench_fraction <= 1:
-            raise ValueError(f"quench_fraction must be in [0, 1], got {self.quench_fraction}")
-        if self.n_chunks < 1:
-            raise ValueError(f"n_chunks must be ≥ 1, got {self.n_chunks}")
-        if self.plan not in PLANS:
-            raise ValueError(f"unknown plan {self.plan!r}; allowed: {', '.join(PLANS)}")
-        if self.plan == "tight" and (not self.powers or any(int(p) != p or p < 1
-                                                             for p in self.powers)):
-            raise ValueError(f"powers must be integers ≥ 1, got {self.powers}")
-        self.schedule.validate()
-        self.ensemble.validate()
-        if self.schedule.kind == "langevin" and (not self.closed or self.plan != "anneal"
-                                                 or self.params.energy != "bending"):
-            # here, not first in the worker (run_langevin_replica checks it there too)
-            raise InvalidParameter(
-                "schedule", "langevin", "a Monte Carlo schedule for "
-                f"{'an open chain' if not self.closed else 'this problem'}: the langevin "
-                "schedule runs closed chains under the bead rule with the bending energy")
-
-    def as_dict(self) -> dict:
-        d = {
-            "moves": self.moves,
-            "schedule": self.schedule.as_dict(),
-            "params": self.params.as_dict(),
-            "quench_fraction": self.quench_fraction,
-            "n_chunks": self.n_chunks,
-            "ensemble": self.ensemble.as_dict(),
-            "plan": self.plan,
-        }
-        if self.plan == "tight":
-            d["powers"] = [int(p) for p in self.powers]
-        return d
 
 
 class _Trace:
@@ -244,255 +139,6 @@ class ReplicaResult:
         d.pop("coords")
         d.pop("traces")
         return d
-
-
-@dataclass(frozen=True)
-class Step:
-    """One chunk of a run's plan: ``moves`` attempted at ``temperature`` (0: quench).
-
-    ``last`` marks the last chunk of a stage whose chain is a candidate result. ``setup``
-    (``tight`` plan, a stage's first chunk): ``(energy, power, k)`` — switch to that energy
-    (the power energy takes its scale from the current angles) and re-seed with
-    seed + 7919·k. ``t_factor``: the temperature is ``e_ref·temperature·t_factor`` with
-    ``e_ref`` the energy per bead at the stage's setup (None: absolute). ``ratchet``: after
-    the chunk, lower the curvature limit θ_max to the largest turning angle.
-    ``restore_best`` (a basin hop's first chunk): start the chunk from the lowest candidate
-    chain found so far (:func:`_candidate`) (the chain is replaced by it; the generator runs on).
-    """
-
-    moves: int
-    temperature: float
-    stage: str
-    last: bool = False
-    setup: tuple | None = None
-    t_factor: float | None = None
-    ratchet: bool = False
-    restore_best: bool = False
-
-
-def _split(total: int, parts: int) -> list[int]:
-    """``total`` moves in ``parts`` chunks whose sizes differ by at most one."""
-    parts = max(1, parts)
-    q, r = divmod(total, parts)
-    return [q + (1 if c < r else 0) for c in range(parts)]
-
-
-def plan_steps(settings: AnnealSettings) -> list[Step]:
-    """The chunks of a run: the ``anneal`` plan (relaxation stage if any, annealing stage,
-    quenches; ``settings.n_chunks`` annealing chunks and 10 quench chunks in all, shared
-    between the stages in proportion to their moves, adding up to ``settings.moves``) or the
-    ``tight`` plan (module docstring)."""
-    if settings.plan == "tight":
-        return _tight_steps(settings)
-    sch = settings.schedule
-    total = int(settings.moves)
-    stages = sch.stages
-    if stages == ("tempering",):
-        raise ValueError("a tempering schedule has no annealing plan (see engine.tempering)")
-    if stages == ("langevin",):
-        raise ValueError("a langevin schedule has no annealing plan (see engine.langevin)")
-    fr = sch.stage_fractions()
-    moves = {s: int(total * fr[s]) for s in stages}
-    moves["anneal"] = total - sum(v for s, v in moves.items() if s != "anneal")
-    nch = settings.n_chunks
-    # the relaxation and the annealing share n_chunks chunks and QUENCH_CHUNKS quench chunks
-    # in proportion to their moves; a hop gets its share of n_chunks (at least 2) and 1 quench
-    ra = [s for s in stages if not s.startswith("hop")]
-    hops = [s for s in stages if s.startswith("hop")]
-    chunks = {s: max(2, round(nch * fr[s])) for s in hops}
-    chunks["anneal"] = nch
-    quench = {s: 1 for s in hops}
-    quench["anneal"] = QUENCH_CHUNKS
-    if "relax" in ra:
-        share = fr["relax"] / (fr["relax"] + fr["anneal"])
-        chunks["relax"] = min(max(1, round(nch * share)), max(1, nch - 1))
-        chunks["anneal"] = max(1, nch - chunks["relax"])
-        quench["relax"] = min(max(1, round(QUENCH_CHUNKS * share)), QUENCH_CHUNKS - 1)
-        quench["anneal"] = QUENCH_CHUNKS - quench["relax"]
-    temperature = {"relax": sch.relax_temperature, "anneal": sch.temperature}
-    steps: list[Step] = []
-    for s in stages:
-        nq = int(moves[s] * settings.quench_fraction)
-        na = moves[s] - nq
-        k = chunks[s]
-        sizes = _split(na, k)
-        for c, m in enumerate(sizes):
-            x = (c + 0.5) / k
-            t = (temperature[s](x) if s in temperature
-                 else sch.hop_temperature(x, int(s.removeprefix("hop"))))
-            steps.append(Step(m, float(t), s, restore_best=(c == 0 and s in hops)))
-        if nq > 0:
-            for m in _split(nq, min(quench[s], nq)):
-                steps.append(Step(m, 0.0, s))
-        steps[-1] = replace(steps[-1], last=True)
-    return steps
-
-
-def _tight_steps(settings: AnnealSettings) -> list[Step]:
-    """The ``tight`` plan: each power p of ``settings.powers`` gets an equal share of the
-    moves in 100 chunks (p = 1: the schedule's annealing; p > 1: geometric from 10⁻² to 10⁻⁵
-    of the energy per bead), then the ratchet quench gets one more share in 20 chunks."""
-    powers = tuple(int(p) for p in settings.powers)
-    per_stage = max(1000, int(settings.moves) // (len(powers) + 1))
-    sch = settings.schedule
-    steps: list[Step] = []
-    for k, p in enumerate(powers):
-        setup = ("bending" if p == 1 else "power", p, k)
-        for c in range(TIGHT_CHUNKS):
-            first = setup if c == 0 else None
-            if p == 1:  # the paper's annealing of the bending energy: a smooth start
-                steps.append(Step(per_stage // TIGHT_CHUNKS,
-                                  float(sch.temperature((c + 0.5) / TIGHT_CHUNKS)), f"p{p}",
-                                  setup=first))
-            else:
-                steps.append(Step(per_stage // TIGHT_CHUNKS, 1e-2, f"p{p}", setup=first,
-                                  t_factor=1e-3 ** (c / TIGHT_CHUNKS)))
-    for _ in range(RATCHET_CHUNKS):
-        steps.append(Step(per_stage // RATCHET_CHUNKS, 0.0, "ratchet", ratchet=True))
-    steps[-1] = replace(steps[-1], last=True)
-    return steps
-
-
-def stage_params(params: MoveParams, energy: str, power: int, pos: np.ndarray,
-                 closed: bool = True) -> MoveParams:
-    """The parameters of a ``tight`` stage: the bending energy, or the power energy with its
-    scale s = 1 − cos θ₉₀ (θ₉₀ the 90th percentile of the current turning angles, so that the
-    energies stay of order one)."""
-    if energy == "bending":
-        return replace(params, energy="bending")
-    th90 = float(np.percentile(np.arccos(np.clip(turning_cosines(pos, not closed), -1, 1)), 90))
-    return replace(params, energy="power", power=int(power),
-                   energy_scale=float(1 - np.cos(max(th90, 1e-3))))
-
-
-# ------------------------------------------------------------------------------------------
-# checkpoints
-# ------------------------------------------------------------------------------------------
-
-
-def start_digest(coords: np.ndarray) -> str:
-    """SHA-256 of the starting chain (float64, C order): ties a checkpoint to its start."""
-    return hashlib.sha256(np.ascontiguousarray(coords, dtype=np.float64).tobytes()).hexdigest()
-
-
-def save_checkpoint(path: str | Path, arrays: dict[str, np.ndarray], meta: dict) -> Path:
-    """Write ``arrays`` and the JSON ``meta`` to ``path`` (``.npz``) atomically (a temporary
-    file of a unique name, then one rename: concurrent writers never share it)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    payload = dict(arrays)
-    payload["meta"] = np.array(json.dumps(meta))
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        np.savez(f, **payload)
-    return path
-
-
-def load_checkpoint(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
-    """Read a checkpoint written by :func:`save_checkpoint`: (arrays, meta).
-
-    Raises
-    ------
-    CheckpointError
-        If the file is not a readable stiffknots checkpoint (empty, truncated, junk, a folder,
-        another format version).
-    """
-    path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files if k != "meta"}
-            meta = json.loads(str(z["meta"]))
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile,
-            json.JSONDecodeError) as exc:
-        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else type(exc).__name__
-        raise CheckpointError(f"corrupt checkpoint {path} ({why}); delete it to start afresh"
-                              ) from None
-    if not isinstance(meta, dict) or meta.get("format") != CHECKPOINT_FORMAT:
-        raise CheckpointError(f"{path}: not a stiffknots checkpoint of format "
-                              f"{CHECKPOINT_FORMAT}; delete it to start afresh")
-    return arrays, meta
-
-
-def run_meta(kind: str, settings: AnnealSettings, seed: int, replica: int,
-             coords: np.ndarray) -> dict:
-    """What identifies a run: a checkpoint is resumed only if all of it matches."""
-    return {
-        "format": CHECKPOINT_FORMAT,
-        "kind": kind,
-        "version": __version__,
-        "seed": int(seed),
-        "replica": int(replica),
-        "settings": json.loads(json.dumps(settings.as_dict())),
-        "start": start_digest(coords),
-    }
-
-
-def check_resumable(meta: dict, expected: dict, path: Path) -> None:
-    """Raise CheckpointError naming the first field in which a checkpoint differs from the
-    run."""
-    for key in ("kind", "version", "seed", "replica", "start", "settings"):
-        if meta.get(key) != expected[key]:
-            what = "starting chain" if key == "start" else key
-            raise CheckpointError(
-                f"checkpoint {path} was written by a different run ({what} differs: "
-                f"{meta.get(key)!r} ≠ {expected[key]!r}); delete it or drop resume"
-            )
-
-
-def restore_state(arrays: dict, settings: AnnealSettings, params: MoveParams | None = None,
-                  prefix: str = "") -> ChainState:
-    """A ChainState exactly as it was checkpointed (generator, counters, incremental energies).
-
-    The cell list is rebuilt from the positions; the kernels' decisions do not depend on the
-    order of their lists, so the continuation is bit-for-bit the uninterrupted one.
-    """
-    st = ChainState(arrays[prefix + "pos"], params or settings.params, seed=0,
-                    ensemble=settings.ensemble)
-    st.rng[:] = np.asarray(arrays[prefix + "rng"], dtype=np.uint64)
-    st.counters[:] = np.asarray(arrays[prefix + "counters"], dtype=np.int64)
-    if prefix + "end_counters" in arrays:
-        st.end_counters[:] = np.asarray(arrays[prefix + "end_counters"], dtype=np.int64)
-        st.slide_counters[:] = np.asarray(arrays[prefix + "slide_counters"], dtype=np.int64)
-    st.energy = float(arrays[prefix + "energy"])
-    st.total_energy = float(arrays[prefix + "total_energy"])
-    return st
-
-
-def state_arrays(state: ChainState) -> dict[str, np.ndarray]:
-    """The arrays that :func:`restore_state` needs."""
-    return {"pos": state.pos, "rng": state.rng, "counters": state.counters,
-            "end_counters": state.end_counters, "slide_counters": state.slide_counters,
-            "energy": np.float64(state.energy), "total_energy": np.float64(state.total_energy)}
-
-
-class Checkpointer:
-    """When to write a checkpoint: every ``every`` chunks and/or every ``seconds`` seconds."""
-
-    def __init__(self, path: str | Path | None, every: int | None = None,
-                 seconds: float | None = None):
-        self.path = Path(path) if path is not None else None
-        if every is not None and every < 1:
-            raise ValueError(f"checkpoint_every must be ≥ 1 chunk, got {every}")
-        if seconds is not None and not seconds > 0:
-            raise ValueError(f"checkpoint_seconds must be > 0, got {seconds}")
-        if self.path is not None and every is None and seconds is None:
-            every = 10
-        self.every = every
-        self.seconds = seconds
-        self._since = 0
-        self._last = time.perf_counter()
-
-    def due(self) -> bool:
-        """Count one chunk; True when a checkpoint should be written now."""
-        if self.path is None:
-            return False
-        self._since += 1
-        if self.every is not None and self._since >= self.every:
-            return True
-        return self.seconds is not None and time.perf_counter() - self._last >= self.seconds
-
-    def written(self) -> None:
-        self._since = 0
-        self._last = time.perf_counter()
 
 
 class Clock:
@@ -626,10 +272,10 @@ def _candidate(state: ChainState, settings: AnnealSettings,
     Without basin hops that is the quenched chain and its total energy. With hops the chain
     is first taken to its local minimum by the final minimiser
     (:func:`stiffknots.engine.polish.polish`: unit bonds and the exclusion rule held, no strand
-    passage) and ranked by that minimum: a Monte Carlo quench stops ~1 % above its minimum
-    (measured on 7_2: 174.2–175.2 against 172.8–173.4 polished), far more than the 0.1–0.3 %
-    that separate the minima the hops walk between, so quenched energies would rank them
-    by the quench's noise. The next hop starts from the polished chain."""
+    passage) and ranked by that minimum: a Monte Carlo quench stops further above its
+    minimum than the minima the hops walk between lie apart, so quenched energies would rank
+    them by the quench's noise (docs/methods/search.md). The next hop starts from the
+    polished chain."""
     pos, energy = state.pos.copy(), float(state.total_energy)
     if not polished:
         return pos, energy
@@ -637,8 +283,8 @@ def _candidate(state: ChainState, settings: AnnealSettings,
 
     p = state.params
     # at most HOP_POLISH_ITER steps: a minimum is usually reached in 9–17, and an active set
-    # that wanders (seen: 100 s on one 6_3 hop) must not stall the run; every iterate is
-    # admissible, so a capped polish still ranks an admissible chain by its true energy
+    # that wanders must not stall the run; every iterate is admissible, so a capped polish
+    # still ranks an admissible chain by its true energy
     res = polish(pos, closed=state.closed, exclusion=p.exclusion, d=p.d, w=p.w,
                  max_iter=HOP_POLISH_ITER)
     if res.energy < energy:

@@ -2,17 +2,17 @@
 
 The crankshaft Monte Carlo of :mod:`stiffknots.engine.kernel` moves a few beads at a time.
 Some minima of the bead rule are reached far more easily by moving every bead at once: the
-4_1's lowest states (ε ≈ 127.4–127.6 at N = 150, two strands crossing 0.23 apart) are found
-by the peer's Langevin dynamics (LAMMPS, ``fix langevin``) in 2 of 3 seeds and by the
-crankshafts only after ≳ 10⁷ moves (bench/RESULTS.md). :func:`run_langevin` runs that
+4_1's lowest states (two strands crossing close together) are found by the peer's Langevin
+dynamics (LAMMPS, ``fix langevin``) far sooner than by the crankshafts
+(docs/methods/search.md). :func:`run_langevin` runs that
 dynamics in a compiled kernel (:func:`stiffknots.engine.langevin_kernel.run_dynamics`: the
 peer's model — stiff harmonic bonds, the bending energy E_d, a WCA wall at the contact
 distance — its schedule, T falling exponentially from ``t_start`` to ``t_end``, and a
 passage guard that is proved in that module's docstring), settles it (blocks of 2,000 steps
 at ``t_end`` with friction γ = 1, until the chain below is admissible), then takes the chain
 back onto the exact model: every bond to unit length by min-norm Gauss–Newton corrections, a
-straight-line motion certified by the final minimiser's passage guard
-(:func:`stiffknots.engine.polish.passage_guard`), and the bead rule checked. The result is an
+straight-line motion certified by the passage guard that the final minimiser uses too
+(:func:`stiffknots.engine.guard.passage_guard`), and the bead rule checked. The result is an
 admissible chain of the same knot type for the final minimiser
 (:func:`stiffknots.engine.polish.polish`), which the problems apply after every replica.
 
@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
+from stiffknots.engine.guard import passage_guard
 from stiffknots.engine.langevin_kernel import run_dynamics
 from stiffknots.engine.prims import check_state, energy_chain, new_rng_state
 from stiffknots.errors import ChainGeometryError, InvalidParameter
@@ -197,8 +198,6 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
     ChainGeometryError
         The final chain could not be made admissible (never seen at the defaults).
     """
-    from stiffknots.engine.polish import passage_guard
-
     s = settings or LangevinSettings()
     s.validate(d)
     x = _check_start(coords, d).copy()

@@ -31,7 +31,8 @@ between two segments a = (a, a+1) and b = (b, b+1) that share no bead, measured 
 has since fallen by at most e_a + e_b, e = the larger c of a segment's beads since then; and
 within one step it is L-Lipschitz in the step's parameter with L = max|Δr| over a's beads plus
 the same over b's, so D(t) ≥ (D(0) + D(1) − L)/2 on the step. The guard keeps, for every such
-pair, one of these certificates > η (η = 10⁻⁹):
+pair, one of these certificates > η (η = 10⁻⁹, the floor of the straight-line guard
+:data:`stiffknots.engine.guard.GUARD_FLOOR`):
 
 * pairs farther apart than ``cap`` at the last full listing (:func:`close_pairs`) are safe
   while 2·max_i c_i < cap − η (c counted since that listing); when a step would break this,
@@ -63,10 +64,9 @@ import math
 import numpy as np
 from numba import njit
 
+from stiffknots.engine.guard import GUARD_FLOOR
 from stiffknots.engine.prims import _next
 from stiffknots.geometry import seg_dist2
-
-GUARD_FLOOR = 1e-9
 
 
 @njit(cache=True)

@@ -40,9 +40,9 @@ class MoveParams:
     p_single : probability that a move is the paper's single-bead move.
     m_law : how a multi-bead move draws its length m in [2, m_max]: ``"uniform"``, ``"log"``
         (log-uniform: as many moves at every scale of m, the mean cost ∝ m_max/ln m_max) or
-        ``"mixed"`` (half of each, the default: 2.2× the uniform law's moves per second at
-        N = 150, 3.4× at N = 600 for ``"log"``, and the uniform law's large moves, which the
-        4_1's 4-fold cage needs to reach its lowest ε; bench/RESULTS.md).
+        ``"mixed"`` (half of each, the default: more moves per second than the uniform law,
+        and its large moves, which the 4_1's 4-fold cage needs to reach its lowest ε;
+        docs/methods/moves.md).
     m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
         multi-bead moves and leaves exactly the paper's move). None (the default): N/2, set by
         :meth:`for_beads` — a whole loop of a doubly covered circle must be able to turn in
@@ -144,10 +144,8 @@ class MoveParams:
         its tests need; tested against a brute-force scan), so it is chosen for speed alone:
         a crankshaft scans a box about every moved bead, and cells of twice the reach (3.06
         bond lengths for the bead rule, 4.41 for the tube w = 1/√2) visit fewer cells per
-        bead than cells of the reach itself. Measured (mixed moves, N = 150, annealed 3_1
-        and 7_4 at T = 1e-2 and 1e-4): bead rule 1.13–1.75× the moves per second of cells of
-        the reach, tube 1.15–1.47×; sides from 3 to 4 bond lengths were the fastest, 6 was
-        slower again (bench/RESULTS.md, 2026-12-03)."""
+        bead than cells of the reach itself, and sides of 3 to 4 bond lengths were the
+        fastest measured (docs/benchmarks.md)."""
         wt = self.w if self.exclusion == "tube" else 0.0
         return 2.0 * max(1.5 + max(wt, self.delta), self.d + 0.5)
 

@@ -13,8 +13,8 @@ With ``relax_fraction`` r > 0 a run has two stages, each ending with its own que
    excess δε ≈ 1, persistence length 2·10⁴ ≫ N): the chain keeps the topology-level shape of
    its braid embedding and only relaxes. For the n = i knots the closed minimal braid *is* the
    circular braid that the paper proves to be the ground state (§VI C), so this stage is what
-   finds it: the 3_1 reaches ε ≤ 79.1 in ≈ 8 CPU-seconds this way, against ≳ 19 s after a
-   hot start (bench/RESULTS.md); it also finds the 4_1's 4-fold cage (ε ≤ 129.6) in < 1 s.
+   finds it, far sooner than a hot start; it also finds the 4_1's 4-fold cage
+   (docs/methods/search.md).
 2. *annealing*: the rest of the moves anneal from ``t_start`` (hot) down to ``t_end`` with the
    power law (the paper's method) or geometrically, which explores other shapes (the 4-fold
    cage, the "80", metastable states).
@@ -26,10 +26,9 @@ With ``relax_fraction`` r > 0 a run has two stages, each ending with its own que
    basin-hopping of Wales & Doye, J. Phys. Chem. A 101, 5111 (1997)). The knots beyond the
    simplest have many minima within a few tenths of a percent of each other (the shape is
    decided, the beads' registry at contacts is not); one hot annealing lands in any of them,
-   the hops walk down to the bottom of its funnel, so that independent replicas agree. With
-   ``t_hop`` = 2·10⁻³ at N = 150 (a thermal excess δε ≈ 45, enough to rearrange contacts,
-   not to undo the shape) two replicas of 7_2 that the annealing had left at 173.13 and
-   173.20 both ended at 172.6445 after 8 hops of 1.5 M moves (bench/RESULTS.md).
+   the hops walk down to the bottom of its funnel, so that independent replicas agree. The
+   default ``t_hop`` = 2·10⁻³ at N = 150 (a thermal excess δε ≈ 45) is enough to rearrange
+   contacts, not to undo the shape (docs/methods/search.md).
 
 The driver keeps the lowest-energy quenched chain of all stages. r = 0 and K = 0 is the plain
 annealing of the paper.
@@ -47,8 +46,8 @@ Parallel tempering
 ``kind = "tempering"`` replaces annealing by replica exchange
 (:mod:`stiffknots.engine.tempering`): ``n_temps`` chains at the fixed geometric ladder
 ``t_end … t_start`` (:meth:`Schedule.ladder`); ``relax_fraction``, ``t_relax``,
-``t_relax_end`` and ``exponent`` are not used. It was measured slower than annealing on both
-benchmark knots (bench/RESULTS.md) and is not the default.
+``t_relax_end`` and ``exponent`` are not used. It is slower than annealing on the benchmark
+knots, so it is not the default (docs/methods/search.md).
 """
 
 from __future__ import annotations
@@ -88,15 +87,11 @@ class Schedule:
     freedom, and ε = E_d·N), so the same schedule at another N means T ∝ 1/N²: the defaults are
     the measured ones at the paper's N = 150 and :meth:`for_beads` scales them by (150/N)².
 
-    The defaults were chosen by measurement (bench/RESULTS.md): the relaxation stage takes 0.4
-    of the moves and cools 5e-5 → 1e-7 (starting at 3e-5 or 7e-5 misses the 3_1's circular
-    braid in 1 of 8 seeds; ending at 3e-7 or 3e-8 is slower or misses it); the annealing
-    stage cools geometrically from 0.1 to 1e-6 — the range of the LAMMPS protocol of the
-    solver benchmark. The paper's power law from 3e-2 (:data:`PAPER_POWER_LAW`, the default
-    before 2026-11-29) spends most of its moves cold and ended the 4_1 in a 4-fold cage,
-    ε ≥ 128.38 at N = 150, in every seed measured; from 0.1 geometrically the 4_1 reaches the
-    lower states ("other", ε 127.47–127.71, the finite-width ground state that LAMMPS finds
-    too) in 5 of 8 measured seeds at 10–15 M moves.
+    The defaults: the relaxation stage takes 0.4 of the moves and cools 5e-5 → 1e-7; the
+    annealing stage cools geometrically from 0.1 to 1e-6 — the range of the LAMMPS protocol
+    of the solver benchmark. The paper's power law from 3e-2 (:data:`PAPER_POWER_LAW`)
+    spends most of its moves cold and leaves the 4_1 in its 4-fold cage, where the geometric
+    cooling reaches the lower states (docs/methods/search.md).
     """
 
     kind: str = "geometric"
@@ -193,7 +188,7 @@ class Schedule:
         return asdict(self)
 
 
-#: The paper's power-law annealing (§VII) from 3e-2 after the relaxation stage: the default of
-#: every problem before 2026-11-29, kept for the open-knot and tightest-knot problems whose
-#: defaults were measured with it.
+#: The paper's power-law annealing (§VII) from 3e-2 after the relaxation stage: the former
+#: default, kept for the open-knot and tightest-knot problems whose defaults were measured
+#: with it (docs/history.md).
 PAPER_POWER_LAW = Schedule(kind="power", t_start=3e-2, t_end=1e-6, exponent=2.0)

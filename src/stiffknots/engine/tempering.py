@@ -18,10 +18,10 @@ the copy of lowest energy is quenched at T = 0 (``quench_fraction`` of the moves
 
 The move budget ``settings.moves`` is shared by the K copies (each gets about 1/K of it), so a
 tempering run costs the CPU time of one annealing run of the same ``moves`` and the two can be
-compared per CPU-second (bench/RESULTS.md). Swap attempts and acceptances are counted per
+compared per CPU-second (docs/methods/search.md). Swap attempts and acceptances are counted per
 neighbour pair; the random numbers of the swaps come from their own xoshiro256+ stream, so a
 run is reproducible from its seed and can be checkpointed and resumed exactly like an
-annealing run (:mod:`stiffknots.engine.driver`).
+annealing run (:mod:`stiffknots.engine.checkpoints`).
 """
 
 from __future__ import annotations
@@ -31,23 +31,17 @@ from pathlib import Path
 
 import numpy as np
 
+from stiffknots.engine import checkpoints
 from stiffknots.engine import prims as K
 from stiffknots.engine.driver import (
     TRACE_KEYS,
-    AnnealSettings,
-    Checkpointer,
     Clock,
     ReplicaResult,
     check_chain,
-    check_resumable,
-    load_checkpoint,
     make_result,
-    restore_state,
     resync,
-    run_meta,
-    save_checkpoint,
-    state_arrays,
 )
+from stiffknots.engine.settings import AnnealSettings
 from stiffknots.engine.state import ChainState
 from stiffknots.errors import RunStopped
 
@@ -120,8 +114,8 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
     kk = len(temps)
     rounds, per, quench = tempering_plan(settings)
     n_steps = rounds + len(quench)
-    ck = Checkpointer(checkpoint, checkpoint_every, checkpoint_seconds)
-    expected = run_meta("tempering", settings, seed, replica, coords)
+    ck = checkpoints.Checkpointer(checkpoint, checkpoint_every, checkpoint_seconds)
+    expected = checkpoints.run_meta("tempering", settings, seed, replica, coords)
     seeds = copy_seeds(seed, kk)
     traces: dict[str, list] = {k: [] for k in TRACE_KEYS}
     tried = np.zeros(kk - 1, dtype=np.int64)
@@ -135,10 +129,10 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
     resumed = None
     chosen = -1  # index of the copy being quenched (after the rounds)
     if resume and ck.path is not None and ck.path.exists():
-        arrays, meta = load_checkpoint(ck.path)
-        check_resumable(meta, expected, ck.path)
-        states = [restore_state({key: v[k] for key, v in arrays.items()
-                                 if key in _STATE_KEYS}, settings) for k in range(kk)]
+        arrays, meta = checkpoints.load_checkpoint(ck.path)
+        checkpoints.check_resumable(meta, expected, ck.path)
+        states = [checkpoints.restore_state({key: v[k] for key, v in arrays.items()
+                                             if key in _STATE_KEYS}, settings) for k in range(kk)]
         swap_rng = np.asarray(arrays["swap_rng"], dtype=np.uint64).copy()
         tried = arrays["swap_tried"].astype(np.int64)
         accepted = arrays["swap_accepted"].astype(np.int64)
@@ -154,7 +148,7 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
     target = settings.target_epsilon
 
     def save(step: int) -> Path:
-        per_copy = [state_arrays(s) for s in states]
+        per_copy = [checkpoints.state_arrays(s) for s in states]
         arrays = {key: np.stack([a[key] for a in per_copy]) for key in _STATE_KEYS}
         arrays.update({"swap_rng": swap_rng, "swap_tried": tried, "swap_accepted": accepted,
                        "order": order})
@@ -162,7 +156,7 @@ def run_tempering(coords: np.ndarray, settings: AnnealSettings, seed: int, repli
         meta = dict(expected, step=step, n_steps=n_steps, done=done, chosen=chosen,
                     wall=clock.wall(), cpu=clock.cpu(), seconds_to_target=hit[0],
                     cpu_seconds_to_target=hit[1])
-        p = save_checkpoint(ck.path, arrays, meta)
+        p = checkpoints.save_checkpoint(ck.path, arrays, meta)
         ck.written()
         return p
 

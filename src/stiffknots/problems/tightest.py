@@ -39,9 +39,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from stiffknots.engine.driver import DEFAULT_POWERS, AnnealSettings
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import PAPER_POWER_LAW
+from stiffknots.engine.settings import DEFAULT_POWERS, AnnealSettings
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve
 from stiffknots.width import Width

@@ -101,7 +101,7 @@ def checkpoints(jobs) -> None:
         another run (other settings, seed, replica, starting chain or version) — the error the
         worker would raise later, raised now.
     """
-    from stiffknots.engine.driver import check_resumable, load_checkpoint, run_meta
+    from stiffknots.engine.checkpoints import check_resumable, load_checkpoint, run_meta
 
     for job in jobs:
         path = job.checkpoint
