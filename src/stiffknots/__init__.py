@@ -47,6 +47,7 @@ _LAZY = {
     "elastica_constants": "stiffknots.theory.elastica",
     # engine settings
     "MoveParams": "stiffknots.engine.params",
+    "Width": "stiffknots.width",
     "Schedule": "stiffknots.engine.schedules",
     # errors
     "StiffKnotsError": "stiffknots.errors",

@@ -33,6 +33,7 @@ __all__ = [
     "EnergyBookkeepingError",
     "IdentificationError",
     "InvalidParameter",
+    "ParameterConflict",
     "RunStopped",
     "StiffKnotsError",
     "StiffKnotsWarning",
@@ -81,6 +82,27 @@ class InvalidParameter(UserInputError):
     def for_option(self, option: str) -> str:
         """The same message naming a command-line option (``--force``) instead."""
         return self.message(option)
+
+
+class ParameterConflict(UserInputError):
+    """Parameters that cannot be given together, or one that needs another.
+
+    Attributes
+    ----------
+    params : the parameters' names in the Python API (``("w", "w_over_L")``).
+    template : the message with one ``{}`` per parameter, in order.
+
+    The command line re-words it with the options' names (:meth:`message`).
+    """
+
+    def __init__(self, template: str, *params: str):
+        self.template = template
+        self.params = params
+        super().__init__(self.message(lambda p: p))
+
+    def message(self, name) -> str:
+        """The message, each parameter spelled by ``name(param)`` (``"--w-over-L"``)."""
+        return self.template.format(*(name(p) for p in self.params))
 
 
 class UnknownKnotError(UserInputError):

@@ -14,12 +14,10 @@ import numpy as np
 from numba import njit
 
 from stiffknots.geometry import seg_dist2
+from stiffknots.width import BEAD_D
 
 __all__ = ["BEAD_D", "bending_energy", "chain_report", "min_bead_distance",
            "min_segment_distance", "vertex_terms", "writhe"]
-
-#: the paper's bead rule (§VII): beads at index distance ≥ 2 no closer than 1/√2
-BEAD_D = 1.0 / math.sqrt(2.0)
 
 
 @njit(cache=True)

@@ -151,18 +151,22 @@ def test_anneal_command_defaults_are_the_library_defaults():
     import inspect
 
     from stiffknots.cli.anneal import anneal as command
-    from stiffknots.cli.anneal import pick_schedule
     from stiffknots.engine.schedules import Schedule
     from stiffknots.problems.closed import DEFAULT_ROUNDS, LANGEVIN_ROUNDS
+    from stiffknots.problems.closed_plan import plan_anneal
 
     sig = inspect.signature(command)
     # the command's default (auto) is the library's langevin schedule and rounds for the bead
     # rule, and the library's default schedule and rounds with an option of the Monte Carlo
     assert sig.parameters["schedule"].default == "auto"
     assert sig.parameters["rounds"].default is None
-    assert pick_schedule("auto", [], None)[:2] == ("langevin", LANGEVIN_ROUNDS)
-    assert pick_schedule("auto", ["--checkpoint"], None)[:2] == (Schedule().kind,
-                                                                DEFAULT_ROUNDS)
+    p = plan_anneal("3_1")
+    assert (p.schedule.kind, p.rounds) == ("langevin", LANGEVIN_ROUNDS)
+    p = plan_anneal("3_1", checkpoint_dir="ckpt")
+    assert (p.schedule.kind, p.rounds) == (Schedule().kind, DEFAULT_ROUNDS)
+    for name in ("beads", "moves", "seed", "exclusion", "w", "start", "polish"):
+        assert sig.parameters[name].default == inspect.signature(plan_anneal).parameters[
+            "w_over_L" if name == "w_over_l" else name].default, name
     assert sig.parameters["replicas"].default == 2
 
 
@@ -238,13 +242,17 @@ def test_anneal_schedule_auto_is_the_dynamics_unless_a_monte_carlo_option():
     """`anneal`'s default schedule (auto) runs the Langevin dynamics for the bead rule, with
     64 rounds at most; an option of the Monte Carlo (tube model, its moves' parameters …) runs
     the paper's annealing with 8; the result says which and why."""
-    from stiffknots.cli.anneal import pick_schedule
+    from stiffknots.problems.closed_plan import plan_anneal
 
-    assert pick_schedule("auto", [], None)[:2] == ("langevin", 64)
-    assert pick_schedule("auto", ["--exclusion tube"], None)[:2] == ("geometric", 8)
-    assert pick_schedule("auto", [], 3)[:2] == ("langevin", 3)
-    assert pick_schedule("geometric", [], None)[:2] == ("geometric", 8)
-    assert pick_schedule("langevin", [], None)[:2] == ("langevin", 64)
+    def kind_rounds(**kw):
+        p = plan_anneal("3_1", **kw)
+        return p.schedule.kind, p.rounds
+
+    assert kind_rounds() == ("langevin", 64)
+    assert kind_rounds(exclusion="tube") == ("geometric", 8)
+    assert kind_rounds(rounds=3) == ("langevin", 3)
+    assert kind_rounds(schedule="geometric") == ("geometric", 8)
+    assert kind_rounds(schedule="langevin") == ("langevin", 64)
     for extra, kind, why in (((), "langevin", "the bead rule's default"),
                              (("--exclusion", "tube"), "geometric", "with --exclusion tube"),
                              (("--delta", "0.02"), "geometric", "with --delta")):

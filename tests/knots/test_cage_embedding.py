@@ -71,7 +71,7 @@ def test_starts_selection():
     assert resolve_starts(get_knot("3_1"), "all", 2) == ["braid", "braid"]
     assert resolve_starts(get_knot("4_1"), "cage", 2) == ["cage", "cage"]
     assert resolve_starts(get_knot("4_1"), ["cage", "braid"], 2) == ["cage", "braid"]
-    with pytest.raises(ValueError, match="unknown start"):
+    with pytest.raises(ValueError, match="start must be one of all, braid"):
         resolve_starts(get_knot("4_1"), "sphere", 2)
     with pytest.raises(ValueError, match="3 starts given for 2"):
         resolve_starts(get_knot("4_1"), ["cage"] * 3, 2)

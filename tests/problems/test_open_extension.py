@@ -173,7 +173,8 @@ def test_cli_open_and_tightest_json(capsys):
     n = [p["beads"] for p in d["points"]]
     assert n[0] < n[1] and [p["width"]["beads"] for p in d["points"]] == n
     assert d["beads"] == n[-1] and d["width"] == d["points"][-1]["width"]
-    assert d["width"]["w_over_L"] == pytest.approx(0.1 / n[-1])
+    # an open chain of N beads is N − 1 bonds long
+    assert d["width"]["w_over_L"] == pytest.approx(0.1 / (n[-1] - 1))
     assert d["eps_e"] == d["points"][-1]["eps_e"]
     (fd,) = d["finite_differences"]
     e = [p["energy"] for p in d["points"]]

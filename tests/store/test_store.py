@@ -40,6 +40,7 @@ from stiffknots.store import (
 )
 from stiffknots.store.rows import SHAPES
 from stiffknots.store.schema import COLUMNS
+from stiffknots.width import Width
 
 WRITER = Path(__file__).with_name("writer.py")
 SETTINGS = {"problem": "anneal", "moves": 30_000_000, "start": "all",
@@ -387,9 +388,9 @@ def test_row_from_replica_maps_an_engine_result(store):
                  wall_time=40.0, cpu_time=39.5, min_segment_distance=0.71, knot="5_2",
                  knot_verified=True, version="0.1.0", start="cage", stage_epsilon={"a": 130.0},
                  acceptance={"single": 0.4}, seconds_to_target=None)
-    row, coords = row_from_replica(res, knot="5_2", exclusion="bead", thickness=D, seed=0,
+    row, coords = row_from_replica(res, knot="5_2", width=Width.bead(150, d=D), seed=0,
                                    settings=SETTINGS, shape="4C", converged=True)
-    assert coords is not None and row["beads"] == 150
+    assert coords is not None and row["beads"] == 150 and row["w_over_L"] == D / 150
     assert store.put(row, coords)
     (r,) = store.replicas()
     assert (r["seed"], r["replica"], r["replica_seed"]) == (0, 3, 123456789)

@@ -270,7 +270,7 @@ def test_a_bead_ground_above_the_tube_ground_is_flagged(tmp_path):
     # a tube chain of width w = d is bead-admissible, so the bead rule's minimum lies at or
     # below the tube's: a bead ground above it is a search that missed (10_4, 2026-12-03)
     bead, tube = parse_models("bead,tube")
-    hashes = {m.name: _hash(m) for m in (bead, tube)}
+    hashes = {m.exclusion: _hash(m) for m in (bead, tube)}
 
     def entry(eps_bead, eps_tube):
         with Store(tmp_path / f"{eps_bead}-{eps_tube}.db") as st:

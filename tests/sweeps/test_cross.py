@@ -19,8 +19,8 @@ from stiffknots.sweeps.cross import (
     seed_from_tube,
     seed_pairs,
 )
-from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import sweep_settings
+from stiffknots.width import Width
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 D = 2 ** -0.5
@@ -37,15 +37,15 @@ def _row(knot, model, settings, replica, x, start="braid"):
 
 def _models():
     """The bead and tube models of a sweep at one width, and their replicas' settings."""
-    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
-    return bead, tube, {m.name: sweep_settings(m, budget_of("tiny")) for m in (bead, tube)}
+    bead, tube = Width.of("bead", D, 150), Width.of("tube", D, 150)
+    return bead, tube, {m.exclusion: sweep_settings(m, budget_of("tiny")) for m in (bead, tube)}
 
 
 def test_seed_pairs_need_the_same_beads_and_a_tube_at_least_as_wide():
-    bead, tube = Model("bead", D, 150), Model("tube", D, 150)
+    bead, tube = Width.of("bead", D, 150), Width.of("tube", D, 150)
     assert seed_pairs([bead, tube]) == [(bead, tube)]
-    assert seed_pairs([bead, Model("tube", 0.5, 150)]) == []  # w < d: not bead-admissible
-    assert seed_pairs([bead, Model("tube", D, 300)]) == []
+    assert seed_pairs([bead, Width.of("tube", 0.5, 150)]) == []  # w < d: not bead-admissible
+    assert seed_pairs([bead, Width.of("tube", D, 300)]) == []
     assert seed_pairs([bead]) == [] and seed_pairs([tube]) == []
 
 

@@ -15,9 +15,9 @@ from stiffknots.errors import InvalidParameter, UnknownKnotError, UserInputError
 from stiffknots.store import ReplicaKey, Store, settings_hash
 from stiffknots.sweeps import (
     BUDGETS,
-    Model,
     budget_of,
     is_converged,
+    params_of,
     parse_models,
     pending,
     plan_sweep,
@@ -58,15 +58,15 @@ def test_models_bead_rule_and_tube_width():
     assert (bead.exclusion, tube.exclusion) == ("bead", "tube")
     assert bead.thickness == pytest.approx(D) and tube.thickness == pytest.approx(D)
     assert bead.beads == tube.beads == 150
-    assert bead.params().d == pytest.approx(D) and bead.params().exclusion == "bead"
-    assert tube.params().w == pytest.approx(D) and tube.params().exclusion == "tube"
-    assert "d = 1/√2, N = 150" in bead.width()["text"]
-    assert bead.width()["w_over_L"] == pytest.approx(D / 150)
+    assert params_of(bead).d == pytest.approx(D) and params_of(bead).exclusion == "bead"
+    assert params_of(tube).w == pytest.approx(D) and params_of(tube).exclusion == "tube"
+    assert "d = 1/√2, N = 150" in bead.text
+    assert bead.as_dict()["w_over_L"] == pytest.approx(D / 150)
     (t,) = parse_models("tube", w=0.5)
-    assert t.thickness == 0.5 and t.params().w == 0.5 and "w = 0.5" in t.width()["text"]
+    assert t.thickness == 0.5 and params_of(t).w == 0.5 and "w = 0.5" in t.text
     (b,) = parse_models("bead", w=0.5)  # w is the tube's: the bead rule keeps d = 1/√2
     assert b.thickness == pytest.approx(D)
-    assert [m.name for m in parse_models("tube,bead,tube")] == ["tube", "bead"]
+    assert [m.exclusion for m in parse_models("tube,bead,tube")] == ["tube", "bead"]
     for bad in ("soft", "", "bead,soft"):
         with pytest.raises(InvalidParameter, match="models"):
             parse_models(bad)
@@ -98,13 +98,13 @@ def test_plan_keys_known_in_advance():
     assert len({j.key for j in jobs}) == len(jobs)
     assert len({j.task_key for j in jobs}) == len(jobs)
     j = jobs[0]
-    assert (j.knot, j.model.name, j.replica, j.seed) == ("3_1", "bead", 0, 7)
+    assert (j.knot, j.model.exclusion, j.replica, j.seed) == ("3_1", "bead", 0, 7)
     assert j.key == ReplicaKey("3_1", "bead", 150, D, 7, 0, settings_hash(j.settings))
     # the settings: every setting that changes the result (moves, exclusion and its width)
     s = sweep_settings(models[0], BUDGETS["small"])
     assert s["problem"] == "anneal" and s["start"] == "braid,cage,eighty;added:lowest"
     assert s["moves"] == 5_000_000 and s["params"]["exclusion"] == "bead"
-    hashes = {m.name: settings_hash(sweep_settings(m, BUDGETS["small"])) for m in models}
+    hashes = {m.exclusion: settings_hash(sweep_settings(m, BUDGETS["small"])) for m in models}
     assert hashes["bead"] != hashes["tube"]
     assert settings_hash(sweep_settings(models[0], BUDGETS["default"])) != hashes["bead"]
     (t5,) = parse_models("tube", w=0.5)
@@ -113,7 +113,7 @@ def test_plan_keys_known_in_advance():
     assert [j.knot for j in jobs] == ["3_1"] * 4 + ["4_1"] * 4
     # more replicas of the same moves reuse the first ones (replica r's seed is fixed)
     more = plan_sweep(["3_1"], models[:1], budget_of("small", replicas=4), seed=7)
-    assert {j.key for j in jobs if j.knot == "3_1" and j.model.name == "bead"} < \
+    assert {j.key for j in jobs if j.knot == "3_1" and j.model.exclusion == "bead"} < \
         {j.key for j in more}
     assert replica_seeds(7, 2) == replica_seeds(7, 4)[:2]
 
@@ -253,9 +253,11 @@ def test_seeded_replicas_confirm_a_ground_state_but_do_not_certify_it(tmp_path):
 
 def test_model_validation():
     with pytest.raises(InvalidParameter):
-        Model("soft").validate()
+        parse_models("soft")
     with pytest.raises(InvalidParameter):
-        Model("bead", D, beads=4).validate()
+        parse_models("bead", beads=4)
+    with pytest.raises(InvalidParameter):
+        parse_models("tube", w=1.0)
 
 
 def test_unreachable_scheduler_is_a_user_error():

@@ -180,9 +180,9 @@ def test_both_models_seed_a_bead_replica_from_every_tube_replica(tmp_path):
 def test_a_job_that_cannot_be_built_is_reported_not_stored(tmp_path):
     """8_19 does not fit in 20 beads: its replicas fail (the worker's EmbeddingError), the
     sweep goes on and stores nothing for them."""
-    from stiffknots.sweeps import Model
+    from stiffknots.width import Width
 
-    model = Model("bead", parse_models("bead")[0].thickness, beads=20)
+    model = Width.of("bead", parse_models("bead")[0].thickness, 20)
     with Store(tmp_path / "s.db") as st:
         res = run_sweep(["8_19"], [model], budget_of("tiny"), st, workers=1)
         assert len(res.failed) == 2 and res.ran == 0 and not res.interrupted

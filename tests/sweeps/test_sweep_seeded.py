@@ -47,8 +47,8 @@ def test_both_models_add_replicas_seed_every_tube_replica_and_judge_bead_after(t
             assert rows == list(range(len(rows))) and len(rows) in (2, 4)
         for m, n in zip(models, (len(native), len(tube)), strict=True):
             conv = ensemble_converged(st.states("4_1", m.exclusion, m.beads, m.thickness,
-                                                res.settings_hash[m.name]))
-            assert conv or n == 4, (m.name, n)
+                                                res.settings_hash[m.exclusion]))
+            assert conv or n == 4, (m.exclusion, n)
             if n == 4:  # added because the first two (with the seeded ones) had not converged
                 assert res.added >= 2
         assert sum(e[1] for e in events if e[0] == "added") == res.added

@@ -19,94 +19,55 @@ from stiffknots.cli.app import (
     ResumeOpt,
     SeedOpt,
     StartOpt,
-    UserError,
     check_interrupted,
-    choice,
     claim_checkpoint,
     count,
     emit,
     finish,
     fmt,
+    option_name,
     out,
     prepare_out,
-    tube_only,
-    width_of,
 )
 from stiffknots.report.text import TOUCHING_BELOW, segment_distance_text, touching_note
 
-
-def _thin_beads(name: str, w_over_l: float) -> int:
-    """The N rule of ``--w-over-L`` (:func:`stiffknots.problems.validate.beads_for_width`)
-    with the knot's upper bound as the energy estimate."""
-    from stiffknots.knots.catalogue import get_knot
-    from stiffknots.problems import validate as V
-    from stiffknots.theory.bounds import closed_bounds
-
-    k = get_knot(name)
-    b = closed_bounds(k.bridge_number, k.braid_index)
-    eps = b.upper if b.upper is not None else 4 * b.lower
-    return V.beads_for_width(w_over_l, eps)
-
-
-#: the N from which an unconverged run suggests ``--coarse`` (bench/RESULTS.md, sixth session)
+#: the N from which an unconverged run suggests ``--coarse`` (docs/methods/search.md)
 COARSE_HINT_FROM = 300
 
-#: what an adaptive bead-rule run that ended without a verdict says next (the defaults surveys
-#: of both models and both engines, bench/RESULTS.md, seventh to ninth sessions)
+#: what a bead-rule run that ended without a verdict says next
 BEAD_HINT = ("the bead rule's minima lie within tenths of a percent of each other (strands "
              "sink between each other's beads where they cross), so its independent searches "
-             "rarely meet: with the defaults (N = 150, the langevin schedule, up to 64 rounds) "
-             "33 of the 35 prime knots through 8 crossings converge. The tube model "
-             "(--exclusion tube: a smooth tube of the same diameter; its ε lies above the "
-             "bead rule's) converges for 33 of 35. A verdict is a statistical statement: "
-             "another seed found a lower state for 15 of 66 verdicts of the defaults (by "
-             "0.15-23 %: 7_7 233.97 against 189.92) and 5 of 65 tube verdicts (8_13: 216.4 "
-             "against 278.5); another --seed checks it")
-#: … and an unconverged run of the Monte Carlo (bench/RESULTS.md, eighth and ninth sessions)
+             "rarely meet; the tube model (--exclusion tube: a smooth tube of the same "
+             "diameter, its ε above the bead rule's) converges more often. A verdict is a "
+             "statistical statement: another --seed checks it (docs/methods/verdicts.md)")
+#: … and an unconverged run of the Monte Carlo
 LANGEVIN_HINT = ("The Langevin dynamics (--schedule langevin, the default: every bead moves "
-                 "at every step) converges for 33 of the 35 and ends lower than the "
-                 "annealing's searches on 11 of them (8_11: 209.6 against 251.0)")
-#: … and an unconverged run of the dynamics (bench/RESULTS.md, eighth session)
+                 "at every step) searches other funnels (docs/methods/search.md)")
+#: … and an unconverged run of the dynamics
 ANNEALING_HINT = ("The paper's Monte Carlo annealing (--schedule geometric) searches other "
-                  "funnels: it ends lower than the dynamics on knots of the 80 and CB "
-                  "families (6_3: 160.50 against 162.17; 7_3, 8_1, 8_17)")
+                  "funnels, lower for some knots of the 80 and CB families "
+                  "(docs/methods/search.md)")
 
-
-def pick_schedule(schedule: str, monte_carlo: list[str], rounds: int | None
-                  ) -> tuple[str, int, str]:
-    """The schedule ``--schedule`` runs, its rounds and a sentence saying what ran and why.
-
-    ``auto`` (the default) is the langevin schedule — the better search of the bead rule
-    (bench/RESULTS.md, ninth session: with its 64 rounds 33 of the 35 prime knots through 8
-    crossings converge, with the annealing's 8 rounds 23, in about the same time for the
-    35) — unless an option of the Monte Carlo is given (``monte_carlo``: the tube model,
-    checkpoints, the moves' parameters …), which then runs the paper's annealing
-    (geometric). ``rounds`` None: :data:`~stiffknots.problems.closed.LANGEVIN_ROUNDS` for langevin,
-    :data:`~stiffknots.problems.closed.DEFAULT_ROUNDS` for the others."""
-    from stiffknots.problems.closed import DEFAULT_ROUNDS, LANGEVIN_ROUNDS
-
-    if schedule == "auto" and not monte_carlo:
-        kind, note = "langevin", ("annealing by Langevin dynamics (--schedule auto: the bead "
-                                  "rule's default; the paper's Monte Carlo annealing, §VII: "
-                                  "--schedule geometric)")
-    elif schedule == "auto":
-        kind, note = "geometric", ("the paper's Monte Carlo annealing, §VII, geometric cooling "
-                                   f"(--schedule auto with {', '.join(monte_carlo)}: an option "
-                                   "of the Monte Carlo)")
-    else:
-        kind, note = schedule, _NOTES[schedule]
-    if rounds is None:
-        rounds = LANGEVIN_ROUNDS if kind == "langevin" else DEFAULT_ROUNDS
-    return kind, rounds, note
-
-
-#: what each schedule given by name runs (:func:`pick_schedule`)
+#: what each schedule given by name runs
 _NOTES = {"langevin": "annealing by Langevin dynamics (--schedule langevin)",
           "geometric": "the paper's Monte Carlo annealing, §VII, geometric cooling "
                        "(--schedule geometric)",
           "power": "the paper's Monte Carlo annealing, §VII, power-law cooling "
                    "(--schedule power)",
           "tempering": "Monte Carlo replica exchange (--schedule tempering)"}
+
+
+def schedule_note(plan) -> str:
+    """A sentence saying which search runs and why (:attr:`AnnealPlan.chosen_by`)."""
+    if plan.chosen_by == "auto":
+        return ("annealing by Langevin dynamics (--schedule auto: the bead rule's default; "
+                "the paper's Monte Carlo annealing, §VII: --schedule geometric)")
+    if plan.chosen_by == "monte_carlo":
+        given = ", ".join("--exclusion tube" if p == "exclusion" else option_name(p)
+                          for p in plan.monte_carlo)
+        return ("the paper's Monte Carlo annealing, §VII, geometric cooling (--schedule auto "
+                f"with {given}: an option of the Monte Carlo)")
+    return _NOTES[plan.schedule.kind]
 
 
 def anneal(
@@ -179,111 +140,35 @@ def anneal(
     json_: JsonOpt = False,
 ) -> None:
     """Anneal a knot to its minimum-energy chain (paper §VII), with verified knot type."""
-    from dataclasses import replace
-
     from stiffknots.engine.driver import default_workers
-    from stiffknots.engine.params import MoveParams
-    from stiffknots.engine.schedules import SCHEDULES, Schedule
-    from stiffknots.knots.starts import STARTS
     from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
-    from stiffknots.problems.closed import ClosedAnneal
+    from stiffknots.problems.closed_plan import plan_anneal
     from stiffknots.problems.pool import WorkerPool
 
-    replicas, seed = V.replicas(replicas), V.seed(seed)
-    if w_over_l is not None:
-        if w is not None:
-            raise UserError("--w and --w-over-L both set the tube's diameter; give one")
-        exclusion = "tube"  # as `relax --w-over-L`
-        if beads is None:
-            beads = _thin_beads(name, w_over_l)
-        w = V.w_over_L(w_over_l, V.beads(beads)) * beads
-    beads = V.beads(150 if beads is None else beads)
-    if moves is not None:
-        moves = V.moves(moves)
-    choice("--start", start, ("all", *STARTS))
-    choice("--exclusion", exclusion, ("bead", "tube"))
-    choice("--schedule", schedule, ("auto", *SCHEDULES))
-    tube_only(w, exclusion)
-    monte_carlo = [opt for opt, given in (
-        ("--w-over-L" if w_over_l is not None else "--exclusion tube", exclusion == "tube"),
-        ("--tube-route", tube_route),
-        ("--checkpoint", checkpoint is not None), ("--relax-fraction", relax_fraction is not None),
-        ("--delta", delta is not None), ("--m-max", m_max is not None),
-        ("--coarse", coarse is not None)) if given]
-    schedule, rounds, chosen = pick_schedule(schedule, monte_carlo, rounds)
-    rounds = V.integer("rounds", rounds, 1, V.MAX_ROUNDS)
-    if schedule in ("tempering", "langevin") and relax_fraction is not None:
-        raise UserError("--relax-fraction applies to the power and geometric schedules "
-                        f"({schedule} has no relaxation stage)")
-    if schedule == "langevin":
-        if exclusion != "bead" or tube_route:
-            raise UserError("--schedule langevin runs the bead rule (its dynamics holds beads "
-                            "apart, not tubes): drop --exclusion tube, --w, --w-over-L and "
-                            "--tube-route")
-        if checkpoint is not None:
-            raise UserError("--checkpoint applies to the Monte Carlo schedules (a langevin "
-                            "replica takes seconds)")
-        if delta is not None or m_max is not None:
-            raise UserError("--delta and --m-max set the Monte Carlo moves; the langevin "
-                            "schedule has none (drop them, or give --schedule geometric)")
-        if t_end is None:
-            from stiffknots.problems.closed import langevin_schedule
-
-            t_end = langevin_schedule(beads).t_end
-            if t_start is not None and t_end >= t_start:
-                raise UserError(f"--t-start must lie above the langevin schedule's final "
-                                f"temperature {t_end:g} (or give --t-end), got {t_start:g}")
-    given = {"t_start": t_start, "t_end": t_end, "relax_fraction": relax_fraction}
-    sch = replace(Schedule().for_beads(beads), kind=schedule,
-                  **{k: v for k, v in given.items() if v is not None})
-    params = replace(MoveParams(), exclusion=exclusion,
-                     **({} if delta is None else {"delta": delta}),
-                     **({} if m_max is None else {"m_max": m_max}),
-                     **({} if w is None else {"w": w}))
-    if m_max is not None and not 1 <= m_max <= beads - 3:
-        raise UserError(f"--m-max must be an integer in [1, {beads - 3}] (N − 3 for --beads "
-                        f"{beads}), got {m_max}")
-    if coarse is not None:
-        coarse = V.beads(coarse, "coarse")
-        if coarse >= beads:
-            raise UserError(f"--coarse must be fewer beads than --beads ({beads}), got "
-                            f"{coarse}")
-        if from_file is not None:
-            raise UserError("--coarse and --from both give the starting chain; give one")
-        if w_over_l is not None:
-            raise UserError("--coarse keeps the tube's diameter w in bond units (a thicker "
-                            "knot at fewer beads); give --w, not --w-over-L")
-    initial = None
-    if from_file is not None:
-        from stiffknots.errors import ChainFormatError
-        from stiffknots.formats import load
-
-        if not from_file.strip():
-            raise UserError("--from must name a curve file, got ''")
-        try:
-            initial = load(from_file)
-        except ChainFormatError as exc:
-            raise UserError(f"--from {exc}") from None
-        if not initial.closed:
-            raise UserError(f"--from {from_file}: the curve was read as open; anneal takes a "
-                            "closed curve (a knot)")
+    plan = plan_anneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
+                       exclusion=exclusion, w=w, w_over_L=w_over_l, schedule=schedule,
+                       rounds=rounds, t_start=t_start, t_end=t_end,
+                       relax_fraction=relax_fraction, delta=delta, m_max=m_max,
+                       checkpoint_dir=checkpoint, resume=resume, start=start, polish=polish,
+                       tube_route=tube_route, initial=from_file, coarse=coarse)
     # every input is checked (and the folders claimed) before any work
     checkpoint = claim_checkpoint(checkpoint, resume)
     out_dir = prepare_out(out_dir, overwrite)
-    from stiffknots.knots.catalogue import get_knot
-
-    get_knot(name)  # an unknown name fails here, before any worker process has started
+    replicas, rounds, beads = plan.replicas, plan.rounds, plan.beads
     # the workers start now and import the solvers while this process builds the problem
-    coarse_d = None
+    coarse_d = fine_start = None
     with WorkerPool(default_workers(replicas)).start() as pool:
-        if coarse is not None:
-            initial, coarse_d = _coarse_stage(name, coarse, replicas, seed, params, start,
-                                              polish, json_, pool, beads)
-        problem = ClosedAnneal(name, beads=beads, moves=moves, replicas=replicas, seed=seed,
-                               schedule=sch, params=params, checkpoint_dir=checkpoint,
-                               resume=resume, start=start, rounds=rounds, initial=initial,
-                               polish=polish, tube_route=tube_route)
+        if plan.coarse is not None:
+            problem = plan.coarse_problem()
+            with ReplicaProgress(f"anneal {problem.knot_name}, coarse stage N = {plan.coarse}",
+                                 replicas * problem.rounds, disable=json_) as bars:
+                cres = solve(problem, on_replica_done=bars.done, on_progress=bars,
+                             isolate=True, pool=pool)
+            check_interrupted(cres, None)
+            cs = plan.coarse_start(cres)
+            fine_start, coarse_d = cs.chain, cs.info
+        problem = plan.problem(fine_start)
         if resume:  # a corrupt or foreign checkpoint of any round: one line, before any note
             # (the rounds that start new searches; a continuation's start is known only then)
             for rnd in range(min(rounds, problem.fresh_rounds)):
@@ -294,23 +179,23 @@ def anneal(
                         pool=pool)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None
     check_interrupted(res, hint)
-    width = width_of(params, beads)
+    schedule, width = plan.schedule.kind, res.width
     d = res.to_dict()
     obs = res.best.observables
     d["shape"], d["multiplicity"] = obs["label"], obs["multiplicity"]
     d["shape_reason"] = obs["shape_reason"]
     d["structure"] = obs.get("structure")
-    d["width"] = width
-    d["schedule"], d["schedule_choice"], d["max_rounds"] = schedule, chosen, rounds
+    d["schedule"], d["schedule_choice"] = schedule, schedule_note(plan)
+    d["max_rounds"] = rounds
     if coarse_d is not None:
         d["coarse"] = coarse_d
     if checkpoint is not None:
         d["checkpoint_dir"] = str(checkpoint)
-    if emit(res, d, out_dir, f"{res.knot}: ε = {res.best.epsilon:.3f} ({width['text']})",
+    if emit(res, d, out_dir, f"{res.knot}: ε = {res.best.epsilon:.3f} ({width.text})",
             "anneal", json_, replicas, hint):
         return
     unit = "dynamics steps" if schedule == "langevin" else "moves"
-    t = Table(title=escape(f"{res.knot}, {width['text']}, {res.settings['moves']:,} "
+    t = Table(title=escape(f"{res.knot}, {width.text}, {res.settings['moves']:,} "
                            f"{unit}/replica"))
     # the seeds (64-bit) are in --json and result.json: the table keeps to 80 columns, and ε
     # and the replica are never cut
@@ -348,7 +233,7 @@ def anneal(
                      "touch or nearly touch where they cross: the lowest chain that does)"),
                   markup=False, highlight=False)
     b = res.bounds
-    out.print(f"search: {chosen}", markup=False, highlight=False)
+    out.print(f"search: {d['schedule_choice']}", markup=False, highlight=False)
     out.print(f"shape of the best chain: {obs['label']}"
               + (f" (i = {obs['multiplicity']})" if obs["label"] == "CB" else "")
               + f" — {obs['shape_reason']}", markup=False, highlight=False)
@@ -357,11 +242,12 @@ def anneal(
                   highlight=False)
     out.print(("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
-    if not res.converged and beads >= COARSE_HINT_FROM and coarse is None and initial is None:
-        out.print(f"at N = {beads} a fresh search can miss the ground (7_4, tube, N = 600: "
-                  "228.8 fresh, 163.9 from its N = 150 ground): try --coarse 150",
+    if (not res.converged and beads >= COARSE_HINT_FROM and fine_start is None
+            and plan.initial is None):
+        out.print(f"at N = {beads} a fresh search can miss the ground that a search at "
+                  "N = 150 finds: try --coarse 150 (docs/methods/search.md)",
                   markup=False, highlight=False)
-    if not res.converged and params.exclusion == "bead" and rounds > 1:
+    if not res.converged and width.exclusion == "bead" and rounds > 1:
         out.print(BEAD_HINT + ". " + (ANNEALING_HINT if schedule == "langevin"
                                       else LANGEVIN_HINT),
                   markup=False, highlight=False)
@@ -369,7 +255,7 @@ def anneal(
     where = ("below the thin limit of its shape: the discretisation of N beads lowers ε more "
              "than the width raises it" if below
              else "a finite width: the thin limit w/L → 0 lies below")
-    out.print(f"best ε = {res.best.epsilon:.4f} at {width['text']} ({where}); "
+    out.print(f"best ε = {res.best.epsilon:.4f} at {width.text} ({where}); "
               f"bounds [{fmt(b['lower'])}, {fmt(b['upper'])}] "
               f"({b['attained_by']}); wall time {res.wall_time:.1f} s",
               markup=False, highlight=False)
@@ -378,51 +264,3 @@ def anneal(
         out.print(f"results in {out_dir}/ (result.json, best.xyz, best.json, best.png)",
                   markup=False, highlight=False)
     finish(res, replicas, hint)
-
-
-def _coarse_stage(name: str, beads: int, replicas: int, seed: int, params, start: str,
-                  polish: bool, quiet: bool, pool, fine_beads: int) -> tuple:
-    """``--coarse``: anneal ``name`` at ``beads`` beads (default moves and schedule for that
-    N, two rounds: every default start tried; the fine run's move parameters — exclusion,
-    diameter in bond units, δ — with the default m_max of that N; the same seed) and return
-    its lowest chain that can be resampled to ``fine_beads`` with its knot type certified (the
-    start of the fine run, its exclusion rule held) and what to report of it. A bead-rule
-    chain whose strands touch at a crossing (4_1's `other` states: 10⁻⁴ apart) cannot be: the
-    next lowest is taken, and the report says so."""
-    from dataclasses import replace
-
-    from stiffknots.chain import Chain
-    from stiffknots.knots.resample import ResampleError, resample
-    from stiffknots.problems.base import solve
-    from stiffknots.problems.closed import ClosedAnneal
-
-    params = replace(params, m_max=None)
-    problem = ClosedAnneal(name, beads=beads, replicas=replicas, seed=seed, params=params,
-                           start=start, rounds=2, polish=polish)
-    with ReplicaProgress(f"anneal {problem.knot_name}, coarse stage N = {beads}",
-                         replicas * 2, disable=quiet) as bars:
-        res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True,
-                    pool=pool)
-    check_interrupted(res, None)
-    for r in res.replicas:  # lowest first
-        try:
-            x = resample(Chain(r.coords, True), fine_beads)
-        except ResampleError:
-            continue
-        # the fine run's rule must hold on the resampled chain (new beads near a touching
-        # crossing come closer than d to the other strand)
-        if (x.min_bead_distance() >= params.d if params.exclusion == "bead"
-                else x.min_segment_distance() >= params.w):
-            break
-    else:
-        raise UserError(f"--coarse {beads}: none of the {len(res.replicas)} coarse chains of "
-                        f"{res.knot} resamples to {fine_beads} beads with its knot type "
-                        "certified and the exclusion rule held (strands touch where they "
-                        "cross); run without --coarse")
-    obs = r.observables
-    info = {"beads": beads, "epsilon": r.epsilon, "shape": obs["shape"],
-            "lowest_epsilon": res.best.epsilon, "replica": r.replica,
-            "converged": res.converged, "convergence": res.convergence,
-            "width": width_of(params, beads), "replicas": len(res.replicas),
-            "wall_time": res.wall_time}
-    return Chain(r.coords, True), info

@@ -92,6 +92,15 @@ class Interrupted(Exception):  # noqa: N818 (a request of the user, not an error
     """Ctrl-C: the command stops, says so, and exits with code 130."""
 
 
+#: API parameter → command-line option, where the names differ
+OPTION_NAMES = {"n_beads": "--beads", "checkpoint_dir": "--checkpoint", "initial": "--from"}
+
+
+def option_name(param: str) -> str:
+    """The command-line option of an API parameter (``w_over_L`` → ``--w-over-L``)."""
+    return OPTION_NAMES.get(param, "--" + param.replace("_", "-"))
+
+
 def dump(obj) -> None:
     """Print ``obj`` as JSON on stdout (numpy values converted)."""
     sys.stdout.write(dumps(obj, indent=2) + "\n")
@@ -447,13 +456,6 @@ def finish(res, total: int | None = None, resume_hint: str | None = None) -> Non
         done = f"{len(res.replicas)} of {total} replicas" if total else "part of the run"
         raise Interrupted(f"interrupted: {done} finished; the results above are partial"
                           + (f"; resume with {resume_hint}" if resume_hint else ""))
-
-
-def width_of(params, beads: int) -> dict:
-    """The width a number was computed at (:func:`stiffknots.engine.params.width_of`)."""
-    from stiffknots.engine.params import width_of as _width_of
-
-    return _width_of(params, beads)
 
 
 def save_results(res, out_dir: Path, title: str, command: str) -> dict:

@@ -244,15 +244,15 @@ def atlas(
     # every input is checked before any work; the knot names (the catalogue: seconds) last
     knot_list = _knot_list(knots)
     mods = parse_models(models, w=w)
-    if w is not None and "tube" not in [m.name for m in mods]:
+    if w is not None and "tube" not in [m.exclusion for m in mods]:
         raise UserError("--w is the tube diameter: add tube to --models")
     if bead_search is not None:
         from stiffknots.sweeps.budgets import BEAD_SEARCHES
 
         choice("--bead-search", bead_search, BEAD_SEARCHES)
-        if "bead" not in [m.name for m in mods]:
+        if "bead" not in [m.exclusion for m in mods]:
             raise UserError("--bead-search sets the bead model's search: add bead to --models")
-    if bead_steps is not None and "bead" not in [m.name for m in mods]:
+    if bead_steps is not None and "bead" not in [m.exclusion for m in mods]:
         raise UserError("--bead-steps sets the bead model's dynamics: add bead to --models")
     bud = budget_of(budget, replicas=replicas, moves=moves, bead_search=bead_search,
                     bead_steps=bead_steps)
@@ -297,17 +297,17 @@ def _print(d: dict, mods) -> None:
     from stiffknots.studies.atlas import not_converged_text
 
     sw = d["sweep"]
-    t = Table(title=f"{len(d['knots'])} knots — {', '.join(m.width()['text'] for m in mods)}",
+    t = Table(title=f"{len(d['knots'])} knots — {', '.join(m.text for m in mods)}",
               caption="ground state and ε; ✓ converged, · not; +k metastable states")
     # one cell per model, never cut: the table keeps to 80 columns in a pipe or a log
     for col in ("knot", "n_c", "families"):
         t.add_column(col, justify="right" if col == "n_c" else "left", no_wrap=col == "knot")
     for m in mods:
-        t.add_column(f"{m.name}", justify="right", no_wrap=True)
+        t.add_column(f"{m.exclusion}", justify="right", no_wrap=True)
     for e in d["knots"]:
         cells = [e["name"], str(e["crossing_number"]), ",".join(e["families"]) or "—"]
         for m in mods:
-            me = e["models"][m.name]
+            me = e["models"][m.exclusion]
             g = me["ground"]
             cells.append(f"{g['name']} {g['epsilon']:.2f} {'✓' if me['converged'] else '·'} "
                          f"+{len(me['metastable'])}" if g else "—")

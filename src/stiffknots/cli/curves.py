@@ -189,14 +189,11 @@ def relax(
         finish,
         prepare_folder,
         prepare_out,
-        width_of,
     )
     from stiffknots.formats import closure_note
     from stiffknots.problems.base import solve
     from stiffknots.problems.relax import Relax
 
-    if w_over_l is not None:
-        exclusion = "tube"
     chain = _load(file, closed)
     prepare_folder(out_dir, "--out")  # writable (created now, removed if the command fails)
     # claimed before the problem is built (identifying the curve takes seconds), as anneal
@@ -207,14 +204,14 @@ def relax(
     with ReplicaProgress(f"relax {problem.knot_name}", replicas, disable=json_) as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     check_interrupted(res)
-    width = width_of(problem.settings.params, beads)
-    d = res.to_dict() | {"file": str(file), "closure": closure_note(chain), "width": width}
-    if emit(res, d, out_path, f"{res.knot}: ε = {res.epsilon:.3f} ({width['text']})", "relax",
+    width = res.width
+    d = res.to_dict() | {"file": str(file), "closure": closure_note(chain)}
+    if emit(res, d, out_path, f"{res.knot}: ε = {res.epsilon:.3f} ({width.text})", "relax",
             json_, replicas):
         return
     out.print(f"{file}: {d['closure']}", markup=False, highlight=False)
     out.print(f"{res.knot}: ε = {d['input_epsilon']:.4f} as given → {d['epsilon']:.4f} relaxed "
-              f"({d['shape']}, {width['text']}); "
+              f"({d['shape']}, {width.text}); "
               + ("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
     if out_path is not None:

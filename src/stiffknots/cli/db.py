@@ -26,9 +26,9 @@ db_app = typer.Typer(
 
 
 def _width(exclusion: str, thickness: float, beads: int, key: str = "text") -> str:
-    from stiffknots.sweeps import Model
+    from stiffknots.width import Width
 
-    return Model(exclusion, float(thickness), int(beads)).width()[key]
+    return Width.of(exclusion, float(thickness), int(beads)).as_dict()[key]
 
 
 def _open(ctx: typer.Context):

@@ -25,11 +25,17 @@ from stiffknots.cli.app import (
     Interrupted,
     app,
     err,
+    option_name,
     reflow,
     release_folders,
     work_starts_note,
 )
-from stiffknots.errors import InvalidParameter, UserInputError, WorkerError
+from stiffknots.errors import (
+    InvalidParameter,
+    ParameterConflict,
+    UserInputError,
+    WorkerError,
+)
 
 # the commands, in the order `stiffknots --help` lists them
 for _name, _command in (
@@ -52,14 +58,6 @@ for _name, _command in (
 for _info in db.db_app.registered_commands:
     _info.help = _info.help or reflow(_info.callback.__doc__)
 app.add_typer(db.db_app, name="db")  # the results database: states, grounds
-
-# API parameter → command-line option, where the names differ
-OPTION_NAMES = {"n_beads": "--beads", "checkpoint_dir": "--checkpoint"}
-
-
-def option_name(param: str) -> str:
-    return OPTION_NAMES.get(param, "--" + param.replace("_", "-"))
-
 
 def _say(text: str) -> None:
     err.print(text, highlight=False, markup=False, soft_wrap=True)
@@ -117,8 +115,7 @@ def _sigterm_as_interrupt() -> None:
 
     SIGTERM is how a batch system (Slurm's ``scancel``, a job's time limit) stops a job, and
     the only polite stop of a command started in the background by a script, whose shell
-    sets Ctrl-C's SIGINT to ignored. Until 2026-12-03 it killed the process outright (every
-    file and database row stayed whole, but nothing partial was reported). The handler acts
+    sets Ctrl-C's SIGINT to ignored. The handler acts
     once (a second SIGTERM kills at once) and only in this process: a process forked from it
     (a Dask nanny of the local cluster, its worker) gets the default, so that its cluster can
     still end it with SIGTERM."""
@@ -158,6 +155,9 @@ def _main() -> None:
         rc = app(standalone_mode=False)
     except InvalidParameter as e:
         _say(f"error: {e.for_option(option_name(e.param))}")
+        raise SystemExit(2) from None
+    except ParameterConflict as e:
+        _say(f"error: {e.message(option_name)}")
         raise SystemExit(2) from None
     except (UserInputError, ValueError) as e:
         # ValueError: parameter validation of the engine; one line whatever the width

@@ -29,8 +29,6 @@ from stiffknots.cli.app import (
     fmt,
     out,
     prepare_out,
-    tube_only,
-    width_of,
 )
 
 UNITS = "bond length b = 1, C = 1: force and tension in C/b², eps_e = E·L_e/C"
@@ -63,8 +61,8 @@ def open_knot(
         help="Tube diameter in bond lengths (tube model; default 0.05).")] = None,
     w_over_l: Annotated[float | None, typer.Option(
         "--w-over-L", help="Tube diameter over the chain's length (sets --exclusion tube; "
-                           "w = (w/L)·N with N the beads of each chain, set by the embedding "
-                           "or --beads).")] = None,
+                           "w = (w/L)·L with L = N − 1 the length of each chain of N beads, "
+                           "set by the embedding or --beads).")] = None,
     m_max: Annotated[int | None, typer.Option(
         help="Largest sub-chain of a crankshaft move (default: N/2; at most N − 4).")
                      ] = None,
@@ -80,36 +78,22 @@ def open_knot(
     excess_length, eps_e, shape of the last point (and force, with --ensemble force), and
     every point.
     """
-    from stiffknots.engine.params import MoveParams
+    from stiffknots.knots.catalogue import get_knot
     from stiffknots.problems import validate as V
+    from stiffknots.problems.open_extension import open_params
 
+    knot = get_knot(name)  # resolved once
     moves, replicas, seed = V.moves(moves), V.replicas(replicas), V.seed(seed)
     choice("--ensemble", ensemble, ("extension", "force"))
-    if w_over_l is not None:
-        if w is not None:
-            raise UserError("--w and --w-over-L both set the tube's diameter; give one")
-        exclusion = "tube"  # as `relax --w-over-L`
-        V.number("w_over_L", w_over_l, 0, V.MAX_W_OVER_L, lo_open=True)
-    choice("--exclusion", exclusion, ("bead", "tube"))
-    tube_only(w, exclusion)
-    if exclusion == "tube" and w is None and w_over_l is None:
-        from stiffknots.problems.open_extension import DEFAULT_OPEN_W
-
-        w = DEFAULT_OPEN_W
-    from stiffknots.problems.open_extension import OPEN_M_LAW
-
-    params = MoveParams(exclusion=exclusion, m_max=m_max, m_law=OPEN_M_LAW,
-                        **({} if w is None else {"w": w}))
+    params = open_params(exclusion, w=w, w_over_L=w_over_l, m_max=m_max)
     forces = floats(force, "--force") if force is not None else []
     les = floats(excess_length, "--excess-length") if excess_length is not None else []
     if ensemble == "force":
-        problems, follow = _force_problems(name, forces, les, beads, moves, replicas, seed,
-                                           params)
+        problems, follow = _force_problems(knot, forces, les, beads, moves, replicas, seed,
+                                           params, w_over_l)
     else:
-        problems, follow = _extension_problems(name, les or [80.0], forces, beads, moves,
-                                               replicas, seed, params)
-    for p in problems:
-        _set_width(p, w_over_l)
+        problems, follow = _extension_problems(knot, les or [80.0], forces, beads, moves,
+                                               replicas, seed, params, w_over_l)
     n_min = min(p.beads for p in problems)
     if m_max is not None and not 1 <= m_max <= n_min - 4:
         raise UserError(f"--m-max must be an integer in [1, {n_min - 4}] (N − 4 for the open "
@@ -140,7 +124,7 @@ def open_knot(
             a * a for a in x)
         summary["finite_differences"] = finite_differences(points)
     if out_dir is not None:
-        summary["files"] = _write(out_dir, results, points, summary)
+        summary["files"] = _write(out_dir, knot, results, points, summary)
     if json_:
         dump(summary)
         finish(stopped)
@@ -151,7 +135,7 @@ def open_knot(
     finish(stopped)
 
 
-def _extension_problems(name, les, forces, beads, moves, replicas, seed, params):
+def _extension_problems(knot, les, forces, beads, moves, replicas, seed, params, w_over_l):
     """Fixed extension: one problem per --excess-length, checked now; a --force adds a point
     at the L_e it selects, known once ε_e is measured (``follow``)."""
     from stiffknots.problems import validate as V
@@ -161,7 +145,8 @@ def _extension_problems(name, les, forces, beads, moves, replicas, seed, params)
     if beads is not None:
         raise UserError("--beads applies to --ensemble force only (at fixed extension the "
                         "embedding sets N)")
-    problems = [OpenExtension(name, le, moves, replicas, seed, params=params) for le in les]
+    problems = [OpenExtension(knot, le, moves, replicas, seed, params=params, w_over_L=w_over_l)
+                for le in les]
     k = problems[0].knot
     eps_lo = open_bounds(k.bridge_number, k.braid_index).lower or 2 * math.pi**2
     for f in forces:
@@ -184,7 +169,7 @@ def _selected_length(force: float, eps_e: float) -> int:
     return int(round(le))
 
 
-def _force_problems(name, forces, les, beads, moves, replicas, seed, params):
+def _force_problems(knot, forces, les, beads, moves, replicas, seed, params, w_over_l):
     """Fixed force: one problem per --force, every one checked now."""
     from stiffknots.problems.open_force import OpenForce
 
@@ -194,24 +179,8 @@ def _force_problems(name, forces, les, beads, moves, replicas, seed, params):
         raise UserError("with --ensemble force, --excess-length is the starting L_e: one "
                         f"value, got {les}")
     le0 = les[0] if les else None
-    return [OpenForce(name, f, beads, moves, replicas, seed, excess_length=le0, params=params)
-            for f in forces], []
-
-
-def _set_width(problem, w_over_l: float | None) -> None:
-    """``--w-over-L``: the tube of ``problem`` is ``w = (w/L)·N`` of its own chain (L = N
-    bonds), checked as ``relax --w-over-L`` (below one bond)."""
-    from dataclasses import replace
-
-    from stiffknots.problems import validate as V
-
-    if w_over_l is None:
-        return
-    n = problem.beads
-    st = problem.settings
-    st.params = replace(st.params, w=V.w_over_L(w_over_l, n) * n)
-    st.validate()
-    st.params.validate(n)
+    return [OpenForce(knot, f, beads, moves, replicas, seed, excess_length=le0, params=params,
+                      w_over_L=w_over_l) for f in forces], []
 
 
 def _run(problems, follow, replicas, quiet, w_over_l=None):
@@ -223,8 +192,7 @@ def _run(problems, follow, replicas, quiet, w_over_l=None):
 
     results = []
 
-    def one(p, label, w_over_l=None):
-        _set_width(p, w_over_l)
+    def one(p, label):
         with ReplicaProgress(label, replicas, disable=quiet) as bars:
             r = solve(p, on_replica_done=bars.done, on_progress=bars, isolate=True)
         if not results:
@@ -242,9 +210,9 @@ def _run(problems, follow, replicas, quiet, w_over_l=None):
     p0 = problems[0]
     for f in follow:
         le = _selected_length(f, results[0].eps_e)
-        r = one(OpenExtension(p0.knot_name, le, p0.settings.moves, p0.replicas, p0.seed,
-                              params=p0.settings.params), f"open {p0.knot_name} F = {f:g}",
-                w_over_l)
+        r = one(OpenExtension(p0.knot, le, p0.settings.moves, p0.replicas, p0.seed,
+                              params=p0.settings.params, w_over_L=w_over_l),
+                f"open {p0.knot_name} F = {f:g}")
         r.requested_force = f
         if r.interrupted:
             return results, r
@@ -268,8 +236,6 @@ def finite_differences(points: list[dict]) -> list[dict]:
 
 def _point(r) -> dict:
     """One row of the output: the physics of one result, its width and its checks."""
-    from stiffknots.engine.params import MoveParams
-
     d = r.to_dict()
     keys = ("excess_length", "energy", "eps_e", "tension", "shape", "beads", "knot_verified",
             "wall_time")
@@ -277,24 +243,23 @@ def _point(r) -> dict:
         keys += ("force", "force_balance")
     p = {k: d[k] for k in keys}
     p["requested_force"] = getattr(r, "requested_force", None)
-    p["width"] = width_of(MoveParams(**r.settings["params"]), r.beads)
+    p["width"] = d["width"]
     p["min_segment_distance"] = r.best.min_segment_distance
     p["shape_features"] = d["shape_features"]
     return p
 
 
-def _write(out_dir: Path, results, points, summary) -> dict:
+def _write(out_dir: Path, knot, results, points, summary) -> dict:
     """Every result in its own sub-folder (``Le_<L_e>`` or ``F_<F>``), μ against 1/L_e² with
     the bounds, ``summary.json``, and the manifest last (:class:`ResultsFolder`)."""
     files = {}
     with ResultsFolder(out_dir, "open"):
-        _write_points(out_dir, results, points, summary, files)
+        _write_points(out_dir, knot, results, points, summary, files)
     return files
 
 
-def _write_points(out_dir: Path, results, points, summary, files: dict) -> None:
+def _write_points(out_dir: Path, k, results, points, summary, files: dict) -> None:
     from stiffknots.fileio import write_json
-    from stiffknots.knots.catalogue import get_knot
     from stiffknots.report.figures import plot_tension, save_figure
     from stiffknots.report.render import save_chain_png
 
@@ -307,7 +272,6 @@ def _write_points(out_dir: Path, results, points, summary, files: dict) -> None:
             title=f"open {r.knot}, {tag.replace('_', ' = ')}: L_e = {r.best.excess_length:.1f}, "
                   f"ε_e = {r.eps_e:.2f}"))
         files[tag] = saved
-    k = get_knot(results[0].knot)
     pts = [{"knot": k.name, "L_e": p["excess_length"], "mu": p["tension"],
             "n": k.bridge_number, "i": k.braid_index} for p in points]
     files["tension_png"] = str(save_figure(plot_tension(pts), out_dir / "tension.png"))

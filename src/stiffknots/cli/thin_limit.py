@@ -50,7 +50,7 @@ def thin_limit(
 
     choice("--budget", budget, BUDGET_NAMES)
     V.seed(seed)
-    get_knot(name)  # a wrong name: one line before any work
+    knot = get_knot(name)  # resolved once; a wrong name: one line before any work
     out_path = prepare_out(out_dir, overwrite)
 
     def runner(problem, label):
@@ -65,7 +65,7 @@ def thin_limit(
 
     try:
         with _stdout_to_stderr(json_):
-            res = thin_limit(name, budget, seed, runner=runner, say=say)
+            res = thin_limit(knot, budget, seed, runner=runner, say=say)
     except KeyboardInterrupt:
         from stiffknots.cli.app import Interrupted
 

@@ -30,7 +30,6 @@ def tightest(
     json_: A.JsonOpt = False,
 ) -> None:
     """Shortest knot whose curvature never exceeds 1/R (paper §IX D): L†/R and its bounds."""
-    from stiffknots.knots.starts import STARTS
     from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
     from stiffknots.problems.tightest import Tightest, radius_of_turn
@@ -39,27 +38,23 @@ def tightest(
     replicas, seed = V.replicas(replicas), V.seed(seed)
     if max_curvature is not None:
         V.number("max_curvature", max_curvature, 0, lo_open=True)
-    A.choice("--start", start, ("all", *STARTS))
-    A.choice("--exclusion", exclusion, ("bead", "tube"))
-    A.tube_only(w, exclusion)
     problem = Tightest(name, beads, moves=moves, replicas=replicas, seed=seed,
-                       exclusion=exclusion, w=0.25 if w is None else w, start=start)
+                       exclusion=exclusion, w=w, start=start)
     out_dir = A.prepare_out(out_dir, overwrite)
     with A.ReplicaProgress(f"tightest {problem.knot_name}", replicas, disable=json_,
                            unit="power energy") as bars:
         res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True)
     A.check_interrupted(res)
-    width = A.width_of(problem.settings.params, beads)
+    width = res.width
     d = res.to_dict()
     d["max_curvature"] = max_curvature
-    d["width"] = width
     if max_curvature is not None:
         d["length"] = d["length_over_R"] / max_curvature
-    if A.emit(res, d, out_dir, f"{res.knot}: L†/R = {res.length_over_R:.3f} ({width['text']})",
+    if A.emit(res, d, out_dir, f"{res.knot}: L†/R = {res.length_over_R:.3f} ({width.text})",
             "tightest", json_, replicas):
         return
     b = res.bounds
-    A.out.print(f"{res.knot}: L†/R = {d['length_over_R']:.4f} at {width['text']} (bounds "
+    A.out.print(f"{res.knot}: L†/R = {d['length_over_R']:.4f} at {width.text} (bounds "
               f"[{A.fmt(b['lower'])}, {A.fmt(b['upper'])}], {b['attained_by']}); "
               f"θ* = {d['theta_max']:.5f} rad, R = {radius_of_turn(d['theta_max']):.3f} bonds; "
               "replicas " + ", ".join(f"{r.length_over_R:.4f}" for r in res.replicas)

@@ -36,8 +36,8 @@ from stiffknots.engine.guard import passage_guard
 from stiffknots.engine.langevin_kernel import run_dynamics
 from stiffknots.engine.prims import check_state, energy_chain, new_rng_state
 from stiffknots.errors import ChainGeometryError, InvalidParameter
+from stiffknots.width import BEAD_D
 
-BEAD_D = float(1 / np.sqrt(2))
 #: default dynamics steps of a replica (N = 150: 1 M steps take ≈ 6 s on one core)
 DEFAULT_STEPS = 1_000_000
 #: the schedule's end temperature for the dynamics (the peer's protocol ends at 1e-4)

@@ -14,8 +14,9 @@ import numpy as np
 
 from stiffknots.engine import prims as K
 from stiffknots.errors import InvalidParameter
+from stiffknots.width import BEAD_D, EXCLUSIONS, Width
 
-EXCLUSION_MODELS = ("bead", "tube")
+EXCLUSION_MODELS = EXCLUSIONS
 ENERGY_MODELS = ("bending", "power")
 ENSEMBLES = ("closed", "extension", "force")
 M_LAWS = ("uniform", "log", "mixed")
@@ -71,8 +72,8 @@ class MoveParams:
     l_cap: float = 0.5
     l_min: float = 0.03
     exclusion: str = "bead"
-    d: float = float(1 / np.sqrt(2))
-    w: float = float(1 / np.sqrt(2))
+    d: float = BEAD_D
+    w: float = BEAD_D
     energy: str = "bending"
     power: int = 8
     energy_scale: float = 1.0
@@ -114,6 +115,19 @@ class MoveParams:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    def width(self, beads: int, closed: bool = True) -> Width:
+        """The width of these parameters at N = ``beads``: the exclusion model and its
+        thickness (d for the bead rule, w for the tube)."""
+        t = self.w if self.exclusion == "tube" else self.d
+        return Width.of(self.exclusion, t, beads, closed=closed)
+
+    def at_width(self, width: Width) -> MoveParams:
+        """These parameters with the exclusion model and thickness of ``width`` (the other
+        fields kept; the bead distance d stays when the model is the tube)."""
+        if width.exclusion == "tube":
+            return replace(self, exclusion="tube", w=width.thickness)
+        return replace(self, exclusion="bead", d=width.thickness)
+
     def for_beads(self, n_beads: int) -> MoveParams:
         """These parameters for a chain of ``n_beads`` beads: ``m_max`` = N/2 if unset (the
         scale-free rule: sub-chains up to half the chain, whatever N)."""
@@ -154,19 +168,6 @@ class MoveParams:
         fp[K.F_EINV] = float(self.energy_scale)
         fp[K.F_CMIN] = -2.0 if self.max_turn is None else float(np.cos(self.max_turn))
         return ip, fp
-
-
-def width_of(params: MoveParams, beads: int) -> dict:
-    """The width a number was computed at: the exclusion model, its distance and w/L.
-
-    The bead rule keeps beads ≥ d apart (§VII: d = 1/√2 at N = 150): its tube is about d wide,
-    w/L ≈ d/N; the tube model's diameter is w (bond units), w/L = w/N.
-    """
-    if params.exclusion == "tube":
-        return {"exclusion": "tube", "w": params.w, "beads": beads, "w_over_L": params.w / beads,
-                "text": f"tube w = {params.w:g}, N = {beads} (w/L = {params.w / beads:.2g})"}
-    return {"exclusion": "bead", "d": params.d, "beads": beads, "w_over_L": params.d / beads,
-            "text": f"bead rule d = {params.d:.4g}, N = {beads} (w/L ≈ {params.d / beads:.2g})"}
 
 
 @dataclass(frozen=True)

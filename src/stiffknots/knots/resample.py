@@ -47,6 +47,7 @@ from scipy.optimize import brentq
 from stiffknots.chain import Chain, as_coords
 from stiffknots.errors import InvalidParameter, TopologyChangedError
 from stiffknots.geometry import seg_dist2
+from stiffknots.width import Width
 
 __all__ = ["resample", "minimal_resample_beads", "separation_distance", "ResampleError"]
 
@@ -367,8 +368,9 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
     n_beads : int
         Number of beads of the result (>= 3).
     w_over_L : float, optional
-        Tube diameter over contour length; recorded as ``meta["w"] = w_over_L * n_beads`` (bond
-        units) with ``meta["tube_fits"]`` (the chain's own thickness >= w).
+        Tube diameter over contour length, in (0, 1/8] and below 1/N; recorded as
+        ``meta["w"] = w_over_L * n_beads`` (bond units) with ``meta["tube_fits"]`` (the
+        chain's own thickness >= w).
     check : bool
         Compare the HOMFLY-PT polynomials (chiral) of input and output (must be identical).
     certify : bool
@@ -392,8 +394,8 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
     if isinstance(n_beads, bool) or int(n_beads) != n_beads or n_beads < 3:
         raise InvalidParameter("n_beads", n_beads, "an integer >= 3")
     n = int(n_beads)
-    if w_over_L is not None and not (math.isfinite(w_over_L) and 0 <= w_over_L < 1):
-        raise InvalidParameter("w_over_L", w_over_L, "a number in [0, 1)")
+    # the tube's rule everywhere (:class:`~stiffknots.width.Width`): w/L in (0, 1/8], w < 1
+    width = None if w_over_L is None else Width.tube(n, w_over_L=w_over_L)
     x = _closed_coords(chain)
     b = np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)
     if len(x) == n and np.ptp(b) <= 1e-10 * b.mean():
@@ -403,10 +405,9 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
                     dict(chain.meta) if isinstance(chain, Chain) else {})
         out.meta.update({"resampled_from": n, "chord": float(b.mean()),
                          "scale": float(1 / b.mean()), "thickness": out.min_segment_distance()})
-        if w_over_L is not None:
-            w = float(w_over_L) * n
-            out.meta.update({"w_over_L": float(w_over_L), "w": w,
-                             "tube_fits": bool(out.meta["thickness"] >= w)})
+        if width is not None:
+            out.meta.update({"w_over_L": width.w_over_L, "w": width.thickness,
+                             "tube_fits": bool(out.meta["thickness"] >= width.thickness)})
         return out
     ok, a_max, D, (pts, ell, s, cum) = _condition(x, n)
     if not ok and not (certify and _certify(x, cum, s, n)):
@@ -456,9 +457,9 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
     out = Chain(y, True, meta)
     thick = out.min_segment_distance()
     out.meta["thickness"] = thick
-    if w_over_L is not None:
-        w = float(w_over_L) * n
-        out.meta.update({"w_over_L": float(w_over_L), "w": w, "tube_fits": bool(thick >= w)})
+    if width is not None:
+        out.meta.update({"w_over_L": width.w_over_L, "w": width.thickness,
+                         "tube_fits": bool(thick >= width.thickness)})
     if check:
         from stiffknots.knots.identify import homfly_code
 

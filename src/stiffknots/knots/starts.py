@@ -17,6 +17,8 @@ import functools
 
 import numpy as np
 
+from stiffknots.errors import InvalidParameter
+
 __all__ = ["ALL_STARTS", "STARTS", "available_starts", "default_starts", "resolve_starts",
            "split_replicas", "start_chain"]
 
@@ -98,7 +100,7 @@ def default_starts(knot, n_beads: int = 150) -> list[str]:
     is its circular braid) — the embeddings of the shapes §VII conjectures for it. Measured:
     the knots of the 80 family reached lower states from the 80 (8_8: 226.9 against 231.7
     from braid and cage alone in the atlas sweep, 216.98 against 233.42 in ``anneal``'s
-    defaults survey; bench/RESULTS.md).
+    defaults survey; docs/history.md).
 
     Raises
     ------
@@ -163,14 +165,16 @@ def resolve_starts(knot, start, replicas: int, n_beads: int = 150) -> list[str]:
 
     Raises
     ------
+    InvalidParameter
+        For an unknown name (a ``ValueError``).
     ValueError
-        For an unknown name or a sequence of the wrong length.
+        For a sequence of the wrong length.
     """
     if isinstance(start, str):
         if start == "all":
             return split_replicas(default_starts(knot, n_beads), replicas)
         if start not in STARTS:
-            raise ValueError(f"unknown start {start!r}; choose all or one of {', '.join(STARTS)}")
+            raise InvalidParameter("start", start, "one of " + ", ".join(("all", *STARTS)))
         return [start] * replicas
     out = [str(s) for s in start]
     if len(out) != replicas:

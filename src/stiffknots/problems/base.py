@@ -59,6 +59,7 @@ from stiffknots.fileio import write_bytes, write_json
 from stiffknots.formats import save
 from stiffknots.problems import validate as V
 from stiffknots.problems.pool import WorkerPool, run_jobs
+from stiffknots.width import Width
 
 
 @dataclass
@@ -134,8 +135,7 @@ def default_moves(n_beads: int) -> int:
     N = 150, × N/150). The crankshafts' lengths cover every scale of the chain (m up to N/2,
     half of them log-uniform: :class:`~stiffknots.engine.params.MoveParams`), so the moves
     each bead needs do not grow with N: measured, the 3_1 reaches its circular braid to the
-    same relative precision at N = 600 on 15 M moves as at N = 150 (bench/RESULTS.md). The
-    budget was × (N/150)² before 2026-11-29 (uniform lengths), 16× slower at N = 600."""
+    same relative precision at N = 600 on 15 M moves as at N = 150 (docs/methods/search.md)."""
     return max(1_000_000, round(DEFAULT_MOVES * int(n_beads) / 150))
 
 
@@ -317,6 +317,8 @@ class ReplicaSet:
     converged: bool | None = None
     convergence: str = ""
     rounds: int = 1
+    #: the width every number of the result was computed at
+    width: Width | None = None
 
     @property
     def best(self) -> Replica:
@@ -332,7 +334,9 @@ class ReplicaSet:
     def to_dict(self) -> dict:
         ok = bool(self.replicas) and all(r.knot_verified for r in self.replicas)
         return {"problem": self.problem, "knot": self.knot, "beads": self.beads,
-                "seed": self.seed, **self.physics(), "bounds": self.bounds, "knot_verified": ok,
+                "seed": self.seed, **self.physics(),
+                "width": self.width.as_dict() if self.width is not None else None,
+                "bounds": self.bounds, "knot_verified": ok,
                 "converged": self.converged, "convergence": self.convergence,
                 "rounds": self.rounds,
                 "settings": self.settings, "wall_time": self.wall_time,
@@ -421,11 +425,12 @@ class Problem:
         self.agree = V.integer("agree", agree, 1, V.MAX_REPLICAS)
         self.rel_tol = V.number("rel_tol", rel_tol, 0, 1, lo_open=True)
 
-    def _setup(self, knot: str, replicas: int, seed: int, beads: int | None = None) -> None:
-        """The knot (catalogue entry and name), replicas, seed and beads, validated."""
-        from stiffknots.knots.catalogue import get_knot
+    def _setup(self, knot, replicas: int, seed: int, beads: int | None = None) -> None:
+        """The knot (a catalogue entry, or a name resolved here), replicas, seed and beads,
+        validated."""
+        from stiffknots.knots.catalogue import Knot, get_knot
 
-        self.knot = get_knot(knot)
+        self.knot = knot if isinstance(knot, Knot) else get_knot(knot)
         self.knot_name = self.knot.name
         self.replicas = V.replicas(replicas)
         self.seed = V.seed(seed)
@@ -442,7 +447,7 @@ class Problem:
         """New searches of the rounds after :attr:`fresh_rounds` start from ``start`` (the
         start of the lowest search so far): the fresh rounds tried every embedding, and a
         search from the embedding whose funnel holds the lowest state is the one likeliest to
-        reach it a second time (bench/RESULTS.md, 2026-12-02). Replicas of the fresh rounds
+        reach it a second time (docs/history.md). Replicas of the fresh rounds
         keep their round-robin starts."""
         if start not in self.starts:
             raise ValueError(f"start {start!r} is not one of this problem's {self.starts}")
@@ -500,6 +505,10 @@ class Problem:
 
     def settings_dict(self) -> dict:
         raise NotImplementedError
+
+    def width(self) -> Width:
+        """The width of the problem's chains: its exclusion model and thickness at its N."""
+        return self.settings.params.width(self.beads, closed=self.result_type.closed)
 
     def sort_key(self, r: Replica) -> float:
         return r.epsilon
@@ -572,14 +581,13 @@ def verdict(problem: Problem, replicas: list[Replica]) -> tuple[bool, str]:
     two replicas a round the first round of a knot with three starts tries two; measured on
     4_1 (bead rule, N = 150): braid and cage agreed at the cage's 128.384 after one round
     ("converged"), while six 10⁶-move searches from the 80 all ended lower, at
-    127.43–128.27 (bench/RESULTS.md, 2026-12-03).
+    127.43–128.27 (docs/history.md).
 
     Tube-route searches (:func:`tube_route_lineages`) confirm a state but do not certify it:
     at least one of the searches that reached it must be the bead rule's own. Two tube-route
     searches agree easily on the bead minimum below one tube funnel while the bead rule's own
     searches go lower: counted like the others, they "converged" 7_5 at 183.65 and 6_3 at
-    163.71, whose bead searches reach 176.98 and 160.50 (bench/RESULTS.md, 2026-12-03, third
-    session)."""
+    163.71, whose bead searches reach 176.98 and 160.50 (docs/history.md)."""
     if not replicas:
         return False, "no replica finished"
     bests = lineage_bests(problem, replicas)
@@ -631,7 +639,7 @@ def solve(problem: Problem, *, workers: int | None = None,
     its defaults (:meth:`Problem.favour`): on knots whose minima lie within tenths of a
     percent of each other, a long search walks down to the bottom of its funnel where a short
     one stops anywhere in it, while new searches keep finding other funnels
-    (bench/RESULTS.md).
+    (docs/history.md).
 
     Ctrl-C keeps the finished replicas (``interrupted`` is then True). ``on_progress``
     receives, while the replicas run, records ``{"replica", "done", "total", "epsilon",
@@ -674,7 +682,7 @@ def solve(problem: Problem, *, workers: int | None = None,
         settings=problem.settings_dict(), replicas=results,
         wall_time=time.perf_counter() - t0, interrupted=interrupted,
         bounds=problem.bounds(), converged=converged, convergence=reason, rounds=rounds,
-        **problem.result_fields(results))
+        width=problem.width(), **problem.result_fields(results))
 
 
 def _rounds(problem: Problem, nw: int, done: Callable[[Replica], None],

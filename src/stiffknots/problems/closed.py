@@ -10,7 +10,7 @@ with exactly the result of an uninterrupted run (:mod:`stiffknots.engine.driver`
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
@@ -19,6 +19,7 @@ from stiffknots.engine.langevin import DEFAULT_STEPS as LANGEVIN_STEPS
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter
+from stiffknots.knots.catalogue import Knot
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import (
     Job,
@@ -35,7 +36,7 @@ DEFAULT_ROUNDS = 8  # rounds of replicas until the lowest state is reached by tw
 #: dynamics steps costs about half an annealing replica (≈ 4.4 s at N = 150) and easy knots
 #: stop after a few rounds; through 8 crossings 8_7 and 8_2 converge after 34 and 51 rounds,
 #: and the 35 knots take about the annealing's time with its 8 rounds (≈ 29 min; a knot that
-#: never converges ≈ 4.5–5 min; bench/RESULTS.md, ninth session)
+#: never converges ≈ 4.5–5 min; docs/history.md)
 LANGEVIN_ROUNDS = 64
 
 
@@ -64,7 +65,7 @@ LANGEVIN_LEG_T_START = 2e-3
 #: replica to its ``t_end``. Measured on the 96 bead ensembles the 249-knot atlas left
 #: unconverged (one leg from each of the four lowest own searches, 384 legs, 1.3 CPU s each):
 #: 9 converged; reheated to 10⁻² (three legs each) 6 converged and 28 grounds went lower
-#: by > 0.1 % — those legs leave the funnel (bench/RESULTS.md, 2026-12-05, thirteenth session)
+#: by > 0.1 % — those legs leave the funnel (docs/history.md)
 LANGEVIN_LEG_FRACTION = 0.3
 #: Tube-route searches of the bead rule (opt-in: ``tube_route=True``): in a bead-rule run, the
 #: new searches of this round on (0-based: the third, the first after the fresh rounds) anneal
@@ -77,7 +78,7 @@ LANGEVIN_LEG_FRACTION = 0.3
 #: Not on by default: over the first 20 knots of the survey through 8 crossings it found lower
 #: grounds for 6 (7_5: 173.90 against 176.98; 8_2: 166.51 against 167.10) and higher ones for
 #: 7 (8_4: 188.08 against 181.49), since it takes the place of the bead rule's own new
-#: searches, and converged 13 of 20 against 14 (bench/RESULTS.md, 2026-12-03, third session).
+#: searches, and converged 13 of 20 against 14 (docs/history.md).
 #: From the second round on, two tube-route searches counted like the others "converged" 7_5
 #: at 183.65 (CB3): hence the fresh rounds stay the bead rule's own.
 TUBE_ROUTE_FROM = 2
@@ -88,8 +89,6 @@ class AnnealResult(ReplicaSet):
     """Replicas of one closed knot, best (lowest ε) first."""
 
     problem: ClassVar[str] = "anneal"
-    #: the width of the run (:func:`stiffknots.engine.params.width_of`)
-    width: dict = field(default_factory=dict)
 
     @property
     def epsilon(self) -> float:
@@ -104,10 +103,10 @@ class AnnealResult(ReplicaSet):
         ob = self.best.observables if self.replicas else {}
         return thin_limit_note(self.best.epsilon if self.replicas else None,
                                ob.get("label"), ob.get("multiplicity"),
-                               self.width.get("text", "a finite width"))
+                               self.width.text if self.width else "a finite width")
 
     def physics(self) -> dict:
-        return super().physics() | {"width": self.width, "thin_limit": self.thin_limit}
+        return super().physics() | {"thin_limit": self.thin_limit}
 
 
 def checkpoint_path(checkpoint_dir: str | Path, replica: int) -> Path:
@@ -120,7 +119,7 @@ class ClosedAnneal(Problem):
 
     result_type = AnnealResult
 
-    def __init__(self, knot: str, beads: int = 150, moves: int | None = None,
+    def __init__(self, knot: str | Knot, beads: int = 150, moves: int | None = None,
                  replicas: int = 2, seed: int = 0, *, schedule: Schedule | None = None,
                  params: MoveParams | None = None, quench_fraction: float = 0.1,
                  target_epsilon: float | None = None,
@@ -134,9 +133,9 @@ class ClosedAnneal(Problem):
         if initial is not None:  # a curve of the user: named, resampled and checked first
             from stiffknots.problems.relax import prepare_curve
 
-            ex = (params.exclusion if params is not None else "bead")
-            wl = params.w / beads if params is not None and ex == "tube" else None
-            x, knot, self.naming, p0 = prepare_curve(initial, beads, ex, wl, knot)
+            width = (params or MoveParams()).width(V.beads(beads))
+            x, name, self.naming, p0 = prepare_curve(initial, width, knot)
+            knot = knot if isinstance(knot, Knot) and knot.name == name else name
             params = params or p0
         self._setup(knot, replicas, seed, beads)
         self._verdict_rule(rounds, agree, rel_tol)
@@ -235,7 +234,7 @@ class ClosedAnneal(Problem):
         ``t_end`` over :data:`LANGEVIN_LEG_FRACTION` of a replica's steps, then polished like
         a replica (the atlas's bead legs, :mod:`stiffknots.sweeps.legs`). None unless the
         schedule is ``langevin``. ``anneal``'s own rounds do not use it (their Langevin
-        rounds start new searches, as measured in bench/RESULTS.md, ninth session)."""
+        rounds start new searches, as measured: docs/methods/search.md)."""
         from dataclasses import replace
 
         sch = self.settings.schedule
@@ -260,11 +259,6 @@ class ClosedAnneal(Problem):
         if self.tube_settings is not None:
             d["tube_route_from_round"] = TUBE_ROUTE_FROM + 1  # 1-based, as the report counts
         return d
-
-    def result_fields(self, replicas) -> dict:
-        from stiffknots.engine.params import width_of
-
-        return {"width": width_of(self.settings.params, self.beads)}
 
 
 def anneal(

@@ -36,6 +36,7 @@ from stiffknots.engine.schedules import PAPER_POWER_LAW, Schedule
 from stiffknots.errors import EmbeddingError, InvalidParameter
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve, start_code
+from stiffknots.width import Width
 
 DEFAULT_OPEN_MOVES = 30_000_000
 #: The default tube diameter of open knots (bond units): w = 0.05 at N ≈ 150 is w/L ≈ 3·10⁻⁴.
@@ -53,6 +54,29 @@ OPEN_M_LAW = "uniform"
 def default_open_params() -> MoveParams:
     """The default exclusion of open knots: a thin tube, w = :data:`DEFAULT_OPEN_W`."""
     return MoveParams(exclusion="tube", w=DEFAULT_OPEN_W, m_law=OPEN_M_LAW)
+
+
+def open_params(exclusion: str = "tube", *, w: float | None = None,
+                w_over_L: float | None = None, m_max: int | None = None  # noqa: N803
+                ) -> MoveParams:
+    """The move parameters of open knots from width options, cross-checked
+    (:func:`~stiffknots.problems.validate.width_model`): the tube of diameter ``w`` (default
+    :data:`DEFAULT_OPEN_W`) or the bead rule. A diameter given as ``w_over_L`` is set by each
+    problem for its own chain (``w_over_L=``: N is the embedding's)."""
+    model = V.width_model(exclusion, w=w, w_over_L=w_over_L)
+    if model == "tube" and w is None and w_over_L is None:
+        w = DEFAULT_OPEN_W
+    return MoveParams(exclusion=model, m_max=m_max, m_law=OPEN_M_LAW,
+                      **({} if w is None else {"w": w}))
+
+
+def with_w_over_L(params: MoveParams, w_over_L: float | None, beads: int  # noqa: N802, N803
+                  ) -> MoveParams:
+    """``params`` with the tube w = (w/L)·(N − 1) of an open chain of ``beads`` beads (its
+    contour length L = N − 1 bonds), or unchanged when ``w_over_L`` is None."""
+    if w_over_L is None:
+        return params
+    return params.at_width(Width.tube(beads, w_over_L=w_over_L, closed=False))
 TWO_PI2 = 2.0 * np.pi**2
 
 
@@ -103,12 +127,13 @@ class OpenResult(ReplicaSet):
         return super().chain_meta(r) | {"eps_e": r.epsilon, "excess_length": r.excess_length}
 
 
-def open_chain(knot: str, excess_length: int, seed: int = 0) -> np.ndarray:
-    """The starting chain of an open knot with the given (integer) excess length."""
-    from stiffknots.knots.catalogue import get_knot
+def open_chain(knot, excess_length: int, seed: int = 0) -> np.ndarray:
+    """The starting chain of an open knot (a catalogue entry or name) with the given (integer)
+    excess length."""
+    from stiffknots.knots.catalogue import Knot, get_knot
     from stiffknots.knots.open_embedding import embed_open
 
-    k = get_knot(knot)
+    k = knot if isinstance(knot, Knot) else get_knot(knot)
     if not k.braid_word:
         raise EmbeddingError(f"{k.name} has no braid word in the catalogue; cannot embed it open")
     le = V.integer("excess_length", excess_length, V.MIN_EXCESS_LENGTH, V.MAX_EXCESS_LENGTH)
@@ -129,19 +154,19 @@ class OpenExtension(Problem):
     def __init__(self, knot: str, excess_length: int = 80, moves: int = DEFAULT_OPEN_MOVES,
                  replicas: int = 2, seed: int = 0, *, params: MoveParams | None = None,
                  schedule: Schedule | None = None, quench_fraction: float = 0.1,
-                 polish: bool = True):
+                 polish: bool = True, w_over_L: float | None = None):  # noqa: N803
         from stiffknots.theory.bounds import open_bounds
 
         self._setup(knot, replicas, seed)
         self.polish = bool(polish)
         self.excess_length = V.integer("excess_length", excess_length, V.MIN_EXCESS_LENGTH,
                                        V.MAX_EXCESS_LENGTH)
-        self.coords = open_chain(self.knot_name, self.excess_length, seed=self.seed)
+        self.coords = open_chain(self.knot, self.excess_length, seed=self.seed)
         self.beads = len(self.coords)
+        params = with_w_over_L(params or default_open_params(), w_over_L, self.beads)
         self.settings = AnnealSettings(moves=V.moves(moves),
                                        schedule=schedule or PAPER_POWER_LAW.for_beads(self.beads),
-                                       params=(params or default_open_params()
-                                               ).for_beads(self.beads),
+                                       params=params.for_beads(self.beads),
                                        quench_fraction=quench_fraction,
                                        ensemble=Ensemble("extension"))
         self.settings.validate()

@@ -37,6 +37,7 @@ from stiffknots.problems.open_extension import (
     default_open_params,
     excess_length_for_force,
     open_chain,
+    with_w_over_L,
 )
 
 DEFAULT_END_FRACTION = 0.1
@@ -80,7 +81,7 @@ class ForceResult(OpenResult):
         }
 
 
-def start_chain(knot: str, force: float, n_beads: int | None = None,
+def start_chain(knot, force: float, n_beads: int | None = None,
                 excess_length: int | None = None, seed: int = 0) -> tuple[np.ndarray, int]:
     """The starting chain (an open embedding padded to ``n_beads``) and its excess length.
 
@@ -90,16 +91,16 @@ def start_chain(knot: str, force: float, n_beads: int | None = None,
     by ⌈L_e/4⌉ beads, room for the knot to take up more length; longer tails only slow the
     annealing down (the crankshafts spend their moves on straight tails).
     """
-    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.catalogue import Knot, get_knot
     from stiffknots.knots.open_embedding import pad_open_chain
     from stiffknots.theory.bounds import open_bounds
 
     def padded(le: int) -> tuple[np.ndarray, int]:
-        x = open_chain(k.name, le, seed=seed)
+        x = open_chain(k, le, seed=seed)
         n = len(x) + 2 * math.ceil(le / 4) if n_beads is None else n_beads
         return pad_open_chain(x, n), le
 
-    k = get_knot(knot)
+    k = knot if isinstance(knot, Knot) else get_knot(knot)
     if excess_length is not None:
         return padded(int(excess_length))
     eps = open_bounds(k.bridge_number, k.braid_index).lower or 2 * math.pi**2
@@ -132,7 +133,8 @@ class OpenForce(Problem):
                  slide_fraction: float = DEFAULT_SLIDE_FRACTION,
                  end_m_max: int = DEFAULT_END_M_MAX, quench_fraction: float = 0.1,
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
-                 checkpoint_seconds: float | None = 60.0):
+                 checkpoint_seconds: float | None = 60.0,
+                 w_over_L: float | None = None):  # noqa: N803
         from stiffknots.theory.bounds import open_bounds
 
         self._setup(knot, replicas, seed)
@@ -149,14 +151,15 @@ class OpenForce(Problem):
             raise InvalidParameter("checkpoint_dir", None, "given when resume=True",
                                    "the folder of the checkpoints")
         self.coords, self.start_excess_length = start_chain(
-            self.knot_name, self.force, n_beads, excess_length, seed=self.seed)
+            self.knot, self.force, n_beads, excess_length, seed=self.seed)
         self.beads = len(self.coords)
         self.code = start_code(self.knot_name, self.coords, False, "open")
         self.moves_kw = {"end_fraction": end_fraction, "slide_fraction": slide_fraction,
                          "end_m_max": end_m_max}
         self.settings = AnnealSettings(
             moves=V.moves(moves), schedule=schedule or default_force_schedule(),
-            params=(params or default_open_params()).for_beads(self.beads),
+            params=with_w_over_L(params or default_open_params(), w_over_L,
+                                 self.beads).for_beads(self.beads),
             quench_fraction=quench_fraction,
             ensemble=Ensemble("force", force=self.force, **self.moves_kw))
         self.settings.validate()

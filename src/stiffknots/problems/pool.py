@@ -286,7 +286,7 @@ def _quiet_wakeup(ex: ProcessPoolExecutor) -> None:
     thread still registered, unlocked, while that thread may be closing the same pipe
     (``_ThreadWakeup.wakeup`` checks ``_closed`` and then writes): on a loaded machine, a
     usage error found just after the pool started ended with a "Bad file descriptor"
-    traceback after its one-line error (fresh clone, `make test`, 2026-12-04) although the
+    traceback after its one-line error although the
     manager thread is joined below. A wake-up that finds the pipe closed has nothing left to
     wake, so its OSError is dropped."""
     wk = getattr(ex, "_executor_manager_thread_wakeup", None)

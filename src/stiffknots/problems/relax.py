@@ -36,12 +36,13 @@ from stiffknots.engine.driver import AnnealSettings
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.schedules import Schedule
 from stiffknots.errors import InvalidParameter, UserInputError
+from stiffknots.knots.catalogue import Knot
 from stiffknots.problems import base
 from stiffknots.problems import validate as V
+from stiffknots.width import Width
 
-D_BEAD = 1 / math.sqrt(2)
-#: default Monte Carlo moves of `relax` per bead (12 M at N = 150, the relaxation stage of the
-#: annealing as it was measured; the annealing's own stage is 6 M since 2026-11-29)
+#: default Monte Carlo moves of `relax` per bead (12 M at N = 150: the budget its defaults were
+#: measured with, twice the annealing's own relaxation stage; docs/curves.md)
 RELAX_MOVES_PER_BEAD = 80_000
 
 
@@ -66,9 +67,10 @@ class RelaxResult(base.ReplicaSet):
                 "naming": self.naming}
 
 
-def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | None,
-                  knot: str | None) -> tuple[Chain, str, dict, MoveParams]:
-    """Name, resample and check a user's closed curve (module docstring, steps 1–3).
+def prepare_curve(chain: Chain, width: Width, knot: str | Knot | None
+                  ) -> tuple[Chain, str, dict, MoveParams]:
+    """Name, resample and check a user's closed curve (module docstring, steps 1–3) for a
+    chain of ``width.beads`` beads of the model ``width``.
 
     Returns the resampled chain, the knot's name, the naming evidence and the move parameters
     of the model. Raises UserInputError (one line) when the curve cannot be used as asked.
@@ -79,17 +81,7 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
     if not chain.closed:
         raise UserInputError("relax takes a closed curve (a knot); for an open knot under "
                              "tension use `stiffknots open`")
-    V.beads(beads)
-    V.choice("exclusion", exclusion, ("bead", "tube"))
-    # every parameter is checked before the curve is named and resampled (seconds of work)
-    if exclusion == "tube":
-        if w_over_L is None:
-            raise InvalidParameter("w_over_L", None, "a number in (0, 1/8] with the tube model "
-                                   "(its diameter, w = (w/L)·N)")
-        V.number("w_over_L", w_over_L, 0, 1 / 8, lo_open=True)
-        if w_over_L * beads >= 1:
-            raise InvalidParameter("w_over_L", w_over_L, f"below 1/N = {1 / beads:.3g}",
-                                   f"the tube must be thinner than a bond at N = {beads}")
+    beads = width.beads
     if knot is not None:
         knot = _knot_name(knot)
     naming = identify_details(chain.coords, closed=True).as_dict()
@@ -105,22 +97,18 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
                              + " or ".join(naming.get("candidates") or ["unknown"])
                              + "); give it with --knot")
     x = resample(chain, beads)
-    if exclusion == "tube":
-        if w_over_L is None:
-            raise InvalidParameter("w_over_L", None, "a number in (0, 1/8] with the tube model "
-                                   "(its diameter, w = (w/L)·N)")
-        w = V.w_over_L(w_over_L, beads) * beads
-        params = MoveParams(exclusion="tube", w=w)
-        have, need = x.min_segment_distance(), w
+    params = MoveParams().at_width(width)
+    need = width.thickness
+    if width.exclusion == "tube":
+        have = x.min_segment_distance()
     else:
-        params = MoveParams(exclusion="bead", d=D_BEAD)
-        have, need = x.min_bead_distance(), D_BEAD
+        have = x.min_bead_distance()
     if have < need:
-        fix = (f"use --beads ≥ {math.ceil(beads * need / have)}" if exclusion == "bead"
+        fix = (f"use --beads ≥ {math.ceil(beads * need / have)}" if width.exclusion == "bead"
                else f"use --w-over-L ≤ {have / beads:.3g} (the curve's own thickness)")
         raise UserInputError(f"the curve resampled to {beads} beads is thinner than the model "
                              f"({have:.3g} < {need:.3g} bond lengths between non-adjacent "
-                             f"{'beads' if exclusion == 'bead' else 'segments'}); {fix}")
+                             f"{'beads' if width.exclusion == 'bead' else 'segments'}); {fix}")
     return x, name, naming, params.for_beads(beads)
 
 
@@ -153,8 +141,8 @@ class Relax(base.Problem):
         if moves is not None:
             moves = V.moves(moves)
         self.polish = bool(polish)
-        x, self.knot_name, self.naming, params = prepare_curve(chain, beads, exclusion,
-                                                                w_over_L, knot)
+        width = V.width(self.beads, exclusion, w_over_L=w_over_L, default_w=None)
+        x, self.knot_name, self.naming, params = prepare_curve(chain, width, knot)
         self.input_epsilon = chain.epsilon()
         self.coords = x.coords
         sch = Schedule().for_beads(beads)
@@ -162,7 +150,7 @@ class Relax(base.Problem):
         relax = Schedule(kind="geometric", t_start=sch.t_relax, t_end=sch.t_relax_end,
                          relax_fraction=0.0)
         # the budget and move law its defaults were measured with: 12 M moves at N = 150
-        # (× N/150), uniform crankshaft lengths (README: 4_1 from ridgerunner → 127.6051)
+        # (× N/150), uniform crankshaft lengths (docs/curves.md)
         self.settings = AnnealSettings(
             moves=V.moves(round(RELAX_MOVES_PER_BEAD * beads) if moves is None else moves),
             schedule=relax, params=replace(params, m_law="uniform"))

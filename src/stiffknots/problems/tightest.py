@@ -44,8 +44,11 @@ from stiffknots.engine.schedules import PAPER_POWER_LAW
 from stiffknots.engine.settings import DEFAULT_POWERS, AnnealSettings
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job, Problem, Replica, ReplicaSet, solve
+from stiffknots.width import Width
 
 DEFAULT_TIGHT_MOVES = 30_000_000
+#: the default tube of the thin knot of §IX D (bond lengths): a regulariser, small against R
+DEFAULT_TIGHT_W = 0.25
 
 
 def length_over_R(theta_max: float, n_beads: int) -> float:
@@ -90,7 +93,7 @@ class Tightest(Problem):
 
     def __init__(self, knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES,
                  replicas: int = 2, seed: int = 0, *, exclusion: str = "tube",
-                 d: float | None = None, w: float | None = 0.25,
+                 d: float | None = None, w: float | None = None,
                  powers: tuple[int, ...] = DEFAULT_POWERS,
                  start: str | Sequence[str] = "all"):
         from stiffknots.theory.bounds import restricted_curvature_bounds
@@ -100,14 +103,15 @@ class Tightest(Problem):
         if not powers:
             V.integer("powers", None)
         powers = tuple(V.integer("powers", p, 1, 1024) for p in powers)
-        kw: dict = {"exclusion": exclusion, "m_law": "uniform"}  # as its defaults were measured
-        if d is not None:
-            kw["d"] = d
-        if w is not None and exclusion == "tube":
-            kw["w"] = w
+        if d is not None and exclusion == "bead":
+            width = Width.bead(self.beads, d=d)
+        else:
+            width = V.width(self.beads, exclusion, w=w, default_w=DEFAULT_TIGHT_W)
+        # uniform crankshaft lengths, as its defaults were measured
+        params = MoveParams(m_law="uniform", **({} if d is None else {"d": d})).at_width(width)
         self.settings = AnnealSettings(moves=V.moves(moves),
                                        schedule=PAPER_POWER_LAW.for_beads(self.beads),
-                                       params=MoveParams(**kw).for_beads(self.beads),
+                                       params=params.for_beads(self.beads),
                                        plan="tight", powers=powers)
         self.settings.validate()
         self.settings.params.validate(self.beads)
@@ -138,7 +142,7 @@ class Tightest(Problem):
 
 def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, replicas: int = 2,
              seed: int = 0, *, exclusion: str = "tube", d: float | None = None,
-             w: float | None = 0.25, powers: tuple[int, ...] = DEFAULT_POWERS,
+             w: float | None = None, powers: tuple[int, ...] = DEFAULT_POWERS,
              workers: int | None = None,
              on_replica_done: Callable[[Replica], None] | None = None,
              start: str | Sequence[str] = "all") -> TightResult:
@@ -151,8 +155,8 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
     moves : attempted moves per replica, shared equally by the stages and the final quench.
     replicas, seed, workers : as for :func:`stiffknots.anneal`.
     exclusion, d, w : exclusion model and distances in bond lengths. The thin knot of §IX D
-        has no thickness: the default is a thin tube, w = 0.25 (the paper's bead rule,
-        d = 1/√2, is available and gives longer knots at a given N).
+        has no thickness: the default is a thin tube, w = :data:`DEFAULT_TIGHT_W` = 0.25 (the
+        paper's bead rule, d = 1/√2, is available and gives longer knots at a given N).
     powers : the continuation p = 1 (the bending energy, annealed as in §VII), 2, 4, …, 64
         of the minimax energy Σ((1 − cos θ)/s)^p.
     start : starting embedding(s), as for :func:`stiffknots.anneal`: ``'all'`` (default: every

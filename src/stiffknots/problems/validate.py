@@ -2,7 +2,7 @@
 
 Each check raises :class:`~stiffknots.errors.InvalidParameter` naming the parameter, the
 value given and what is allowed; the command line re-words it with the option's name. The
-limits are the documented limits of the package (README, "Limits").
+limits are the documented limits of the package (docs/getting-started.md).
 """
 
 from __future__ import annotations
@@ -12,7 +12,8 @@ import numbers
 from collections.abc import Sequence
 from typing import Any
 
-from stiffknots.errors import InvalidParameter
+from stiffknots.errors import InvalidParameter, ParameterConflict
+from stiffknots.width import BEAD_D, EXCLUSIONS, MAX_W_OVER_L, Width
 
 #: the documented limits
 MIN_BEADS = 8
@@ -29,7 +30,8 @@ MAX_ROUNDS = 100
 def integer(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
     """``value`` as an int in [lo, hi]; floats with an integer value are accepted."""
     ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
-    if not ok and isinstance(value, numbers.Real) and math.isfinite(value) and value == int(value):
+    if (not ok and not isinstance(value, bool) and isinstance(value, numbers.Real)
+            and math.isfinite(value) and value == int(value)):
         ok, value = True, int(value)
     if not ok or (lo is not None and value < lo) or (hi is not None and value > hi):
         raise InvalidParameter(name, value, _describe("an integer", lo, hi))
@@ -111,22 +113,74 @@ def checkpoints(jobs) -> None:
                         path)
 
 
-#: the widest tube of the ``w/L`` options (the paper's thin limit is w/L -> 0, §V A)
-MAX_W_OVER_L = 1 / 8
 #: default relative discretisation error of the N rule (:func:`beads_for_width`)
 DISCRETISATION_REL_ERROR = 1e-3
+#: what the tube model needs when a problem has no default diameter (``relax``)
+_TUBE_NEEDS = "a number in (0, 1/8] with the tube model (its diameter, w = (w/L)·L)"
+
+
+def width_model(exclusion: str | None = None, *, w: float | None = None,
+                w_over_L: float | None = None) -> str:  # noqa: N803
+    """The exclusion model that a problem's width parameters ask for, cross-checked before
+    its N is known (:func:`width` gives the rules).
+
+    Raises
+    ------
+    InvalidParameter
+        An unknown exclusion model, a w/L outside (0, 1/8].
+    ParameterConflict
+        ``w`` with ``w_over_L``, or ``w`` with the bead rule.
+    """
+    if w is not None and w_over_L is not None:
+        raise ParameterConflict("{} and {} both set the tube's diameter; give one", "w",
+                                "w_over_L")
+    if w_over_L is not None:
+        number("w_over_L", w_over_L, 0, MAX_W_OVER_L, lo_open=True)
+        return "tube"
+    exclusion = choice("exclusion", "bead" if exclusion is None else exclusion, EXCLUSIONS)
+    if exclusion == "bead" and w is not None:
+        raise ParameterConflict("{} applies to {} tube only (the bead rule's distance is "
+                                "d = 1/√2); add {} tube or drop {}", "w", "exclusion",
+                                "exclusion", "w")
+    return exclusion
+
+
+def width(beads_: int, exclusion: str | None = None, *, w: float | None = None,
+          w_over_L: float | None = None, closed: bool = True,  # noqa: N803
+          default_w: float | None = BEAD_D) -> Width:
+    """The width of a problem from its parameters, cross-checked once.
+
+    ``w_over_L`` sets the tube model (w = (w/L)·L, L = N closed, N − 1 open); ``w`` is the
+    tube's diameter in bond lengths and applies to the tube only; the two set one diameter
+    and are never given together. A tube with neither has the diameter ``default_w`` (None:
+    the problem needs one, e.g. ``relax``). The bead rule has the paper's d = 1/√2 (§VII).
+
+    Raises
+    ------
+    InvalidParameter
+        An unknown exclusion model, a width outside its range (:class:`~stiffknots.width.Width`).
+    ParameterConflict
+        ``w`` with ``w_over_L``, or ``w`` with the bead rule.
+    """
+    n = beads(beads_)
+    model = width_model(exclusion, w=w, w_over_L=w_over_L)
+    if w_over_L is not None:
+        return Width.tube(n, w_over_L=w_over_L, closed=closed)
+    if model == "tube":
+        if w is None and default_w is None:
+            raise InvalidParameter("w_over_L", None, _TUBE_NEEDS)
+        return Width.tube(n, w=default_w if w is None else w, closed=closed)
+    return Width.bead(n, closed=closed)
 
 
 def w_over_L(value: Any, n_beads: int, name: str = "w_over_L") -> float:  # noqa: N802
-    """A tube width ``w/L`` for a chain of ``n_beads`` unit bonds (``L = N``): a number in
-    ``(0, 1/8]`` whose diameter ``w = (w/L)·N`` is below one bond (a tube as wide as a bond
+    """A tube width ``w/L`` for a closed chain of ``n_beads`` unit bonds (``L = N``): a number
+    in ``(0, 1/8]`` whose diameter ``w = (w/L)·N`` is below one bond (a tube as wide as a bond
     would forbid the chain's own bends)."""
-    value = number(name, value, 0, MAX_W_OVER_L, lo_open=True)
-    if value * n_beads >= 1:
-        raise InvalidParameter(name, value, f"below 1/N = {1 / n_beads:.3g}",
-                               f"the tube w = (w/L)·N must be thinner than a bond at "
-                               f"N = {n_beads}")
-    return value
+    try:
+        return Width.tube(n_beads, w_over_L=value).w_over_L
+    except InvalidParameter as e:
+        raise InvalidParameter(name, e.value, e.allowed, e.note) from None
 
 
 def beads_for_width(w_over_L: float, epsilon: float,  # noqa: N803

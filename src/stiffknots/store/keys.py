@@ -32,12 +32,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from stiffknots._json import to_plain
+from stiffknots.width import EXCLUSIONS
 
 __all__ = ["ReplicaKey", "KEY_FIELDS", "settings_hash", "canonical_json", "thickness_key",
            "EXCLUSIONS", "knot_sort_key"]
-
-#: Exclusion models (:class:`stiffknots.engine.state.MoveParams` ``exclusion``).
-EXCLUSIONS = ("bead", "tube")
 
 #: The fields of the unique key, in order.
 KEY_FIELDS = ("knot", "exclusion", "beads", "thickness", "seed", "replica", "settings_hash")

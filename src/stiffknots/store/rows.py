@@ -23,6 +23,7 @@ from stiffknots._json import to_plain
 from stiffknots._version import __version__
 from stiffknots.store.keys import EXCLUSIONS, ReplicaKey, canonical_json, settings_hash
 from stiffknots.store.schema import COLUMNS
+from stiffknots.width import Width
 
 __all__ = ["SHAPES", "REQUIRED", "OPTIONAL", "normalise_row", "decode_row", "coords_blob",
            "blob_coords", "row_from_replica", "search_of"]
@@ -178,8 +179,8 @@ def normalise_row(row: Mapping[str, Any], coords: Any) -> tuple[dict[str, Any], 
     key = ReplicaKey(_text(row, "knot"), exclusion, beads, thickness, _int(row, "seed", 0),
                      _int(row, "replica", 0), h)
     if row.get("w_over_L") is None:
-        length = beads - 1 if settings.get("closed") is False else beads
-        w_over_l = thickness / length
+        w_over_l = Width.of(exclusion, thickness, beads,
+                            closed=settings.get("closed") is not False).w_over_L
     else:
         w_over_l = _real(row, "w_over_L", low=0.0, strict=True)
 
@@ -250,8 +251,8 @@ _RESULT_SKIP = {"coords", "trace_moves", "trace_temperature", "trace_epsilon", "
                 "knot"}
 
 
-def row_from_replica(result: Any, *, knot: str, exclusion: str, thickness: float, seed: int,
-                     settings: Mapping[str, Any], beads: int | None = None,
+def row_from_replica(result: Any, *, knot: str, width: Width, seed: int,
+                     settings: Mapping[str, Any],
                      shape: str | None = None, multiplicity: int | None = None,
                      converged: bool | None = None,
                      **fields: Any) -> tuple[dict[str, Any], np.ndarray]:
@@ -267,9 +268,10 @@ def row_from_replica(result: Any, *, knot: str, exclusion: str, thickness: float
     ----------
     result : object
         With the attributes above and ``coords``.
-    knot, exclusion, thickness, seed, settings : the key fields the result does not carry.
-    beads : int, optional
-        Default: the chain's length.
+    knot, seed, settings : the key fields the result does not carry.
+    width : Width
+        The exclusion model, its thickness, N and w/L (the key's ``exclusion``, ``thickness``
+        and ``beads``, and the row's ``w_over_L``).
     shape, multiplicity, converged : optional classification and convergence verdict.
     **fields : further row fields (``problem``, ``created``, ...).
 
@@ -280,9 +282,9 @@ def row_from_replica(result: Any, *, knot: str, exclusion: str, thickness: float
     """
     coords = np.asarray(result.coords)
     summary = result.summary() if hasattr(result, "summary") else dict(vars(result))
-    row: dict[str, Any] = {"knot": knot, "exclusion": exclusion, "thickness": thickness,
-                           "seed": seed, "settings": settings,
-                           "beads": len(coords) if beads is None else beads,
+    row: dict[str, Any] = {"knot": knot, "exclusion": width.exclusion,
+                           "thickness": width.thickness, "beads": width.beads,
+                           "w_over_L": width.w_over_L, "seed": seed, "settings": settings,
                            "shape": shape, "multiplicity": multiplicity, "converged": converged}
     extra = {}
     for name, value in summary.items():

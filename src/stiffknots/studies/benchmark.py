@@ -32,6 +32,7 @@ import numpy as np
 from stiffknots.engine.driver import AnnealSettings, run_replica
 from stiffknots.engine.params import MoveParams
 from stiffknots.engine.state import ChainState
+from stiffknots.width import BEAD_D
 
 TARGETS = {"4_1": 129.6, "3_1": 79.1}
 MEASURE_T = 1e-4
@@ -85,7 +86,7 @@ def kernel_rate(st: ChainState, seconds: float = 1.0, repeats: int = 3) -> float
 
 
 def plain_numpy_rate(coords: np.ndarray, moves: int = 20_000, temperature: float = MEASURE_T,
-                     delta: float = math.pi / 100, d: float = 1 / math.sqrt(2),
+                     delta: float = math.pi / 100, d: float = BEAD_D,
                      seed: int = 0) -> float:
     """The same single-bead move written in plain numpy (no compilation, O(N) exclusion)."""
     rng = np.random.default_rng(seed)

@@ -46,6 +46,7 @@ from stiffknots.engine.params import MoveParams
 from stiffknots.errors import InvalidParameter, UserInputError
 from stiffknots.problems import validate as V
 from stiffknots.problems.base import default_moves, solve
+from stiffknots.width import Width
 
 BUDGET_NAMES = ("small", "default")
 
@@ -145,7 +146,7 @@ def _spread(res, rel_tol: float = 1e-3) -> float:
     return max(same) - min(same) if len(same) > 1 else 0.0
 
 
-def thin_limit(knot: str, budget: str = "small", seed: int = 0, *,
+def thin_limit(knot, budget: str = "small", seed: int = 0, *,
                widths: Sequence[float] | None = None, beads: int | None = None,
                runner: Callable[[Any, str], Any] | None = None,
                say: Callable[[str], None] | None = None) -> dict[str, Any]:
@@ -153,7 +154,7 @@ def thin_limit(knot: str, budget: str = "small", seed: int = 0, *,
 
     Parameters
     ----------
-    knot : a catalogue name.
+    knot : a catalogue entry (:class:`~stiffknots.knots.catalogue.Knot`) or name.
     budget : ``"small"`` (minutes) or ``"default"`` (up to about 15 min per knot on 2 cores);
         see :data:`BUDGETS`.
     seed : the seed of every run (replica seeds derive from it).
@@ -175,24 +176,23 @@ def thin_limit(knot: str, budget: str = "small", seed: int = 0, *,
         point (coordinates, for the caller to save).
     """
     from stiffknots.chain import Chain
-    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.knots.catalogue import Knot, get_knot
     from stiffknots.problems.closed import ClosedAnneal
+    from stiffknots.problems.closed_plan import beads_for_knot
     from stiffknots.problems.relax import Relax
     from stiffknots.theory.bounds import closed_bounds
 
     V.choice("budget", budget, BUDGET_NAMES)
     b = BUDGETS[budget]
     seed = V.seed(seed)
-    k = get_knot(knot)
+    k = knot if isinstance(knot, Knot) else get_knot(knot)
     name = k.name
     ws = sorted((float(x) for x in (widths if widths is not None else b.widths)), reverse=True)
     if len(set(ws)) < 2:
         raise InvalidParameter("widths", list(widths or []), "at least two different w/L")
     bnd = closed_bounds(k.bridge_number, k.braid_index)
-    eps_est = bnd.upper if bnd.upper is not None else 4 * bnd.lower
-    n = V.beads(beads) if beads is not None else V.beads_for_width(ws[0], eps_est, b.rel_error)
-    for wl in ws:
-        V.w_over_L(wl, n)
+    n = V.beads(beads) if beads is not None else beads_for_knot(k, ws[0], b.rel_error)
+    widths_ = {wl: Width.tube(n, w_over_L=wl) for wl in ws}
     run = runner or (lambda p, _label: solve(p))
     say = say or (lambda _s: None)
     anneal_moves = V.moves(max(1_000_000, round(b.moves_factor * default_moves(n))))
@@ -200,8 +200,8 @@ def thin_limit(knot: str, budget: str = "small", seed: int = 0, *,
     t0 = time.time()
 
     def anneal_at(wl: float):
-        p = ClosedAnneal(name, beads=n, moves=anneal_moves, replicas=b.replicas, seed=seed,
-                         params=MoveParams(exclusion="tube", w=wl * n), rounds=b.rounds)
+        p = ClosedAnneal(k, beads=n, moves=anneal_moves, replicas=b.replicas, seed=seed,
+                         params=MoveParams().at_width(widths_[wl]), rounds=b.rounds)
         return run(p, f"thin-limit {name} w/L = {wl:g}: anneal")
 
     def relax_at(coords, wl: float, nn: int, what: str = "relax"):
@@ -226,14 +226,16 @@ def thin_limit(knot: str, budget: str = "small", seed: int = 0, *,
         convergence = res.convergence
         run_shape = res.best.observables.get("shape")
         if run_shape != shape:  # a tube thinner than CLASSIFY_D_MIN: the verdict's words
-            convergence += (f" (the run names shapes at d = w = {wl * n:.3g}, where this "
+            convergence += (f" (the run names shapes at d = w = {widths_[wl].thickness:.3g}, "
+                            f"where this "
                             f"chain reads {run_shape}; read at d = {CLASSIFY_D_MIN:g} it is "
                             f"{shape})")
         sig = [_spread(res)]
         other = [c[1] for c in cands if c[1] is not res and _shape(c[1])[0] == shape]
         sig += [abs(o.best.epsilon - res.best.epsilon) for o in other]
         points.append({
-            "w_over_L": wl, "beads": n, "w": wl * n, "epsilon_raw": res.best.epsilon,
+            "w_over_L": wl, "beads": n, "w": widths_[wl].thickness,
+            "width": widths_[wl].as_dict(), "epsilon_raw": res.best.epsilon,
             "shape": shape, "label": label, "multiplicity": mult,
             "converged": bool(res.converged), "convergence": convergence, "route": route,
             "run_shape": run_shape,

@@ -16,8 +16,9 @@ Public API
 :data:`BUDGETS`, :func:`budget_of`, :class:`Budget`, :data:`BEAD_SEARCHES`
     tiny / small / default / full, and how the bead rule searches
     (:mod:`stiffknots.sweeps.budgets`).
-:class:`Model`, :func:`parse_models`
-    bead / tube at a width and N (:mod:`stiffknots.sweeps.models`).
+:func:`parse_models`, :func:`params_of`
+    The models: bead / tube at a width and N, each a :class:`~stiffknots.width.Width`
+    (:mod:`stiffknots.sweeps.models`).
 :func:`resolve_knots`, :func:`plan_sweep`, :func:`pending`, :func:`sweep_settings`
     The jobs and their keys (:mod:`stiffknots.sweeps.plan`).
 :func:`is_converged`, :func:`ensemble_converged`
@@ -28,7 +29,7 @@ Public API
 from stiffknots.sweeps.budgets import BEAD_SEARCHES, BUDGETS, Budget, budget_of
 from stiffknots.sweeps.convergence import RULE as CONVERGENCE_RULE
 from stiffknots.sweeps.convergence import ensemble_converged, is_converged
-from stiffknots.sweeps.models import MODELS, Model, parse_models
+from stiffknots.sweeps.models import MODELS, params_of, parse_models
 from stiffknots.sweeps.plan import (
     SweepJob,
     pending,
@@ -40,5 +41,5 @@ from stiffknots.sweeps.run import SweepListener, SweepResult, run_sweep, store_r
 
 __all__ = ["BEAD_SEARCHES", "BUDGETS", "Budget", "budget_of", "CONVERGENCE_RULE",
            "ensemble_converged", "is_converged", "MODELS",
-           "Model", "parse_models", "SweepJob", "pending", "plan_sweep", "resolve_knots",
+           "params_of", "parse_models", "SweepJob", "pending", "plan_sweep", "resolve_knots",
            "sweep_settings", "SweepListener", "SweepResult", "run_sweep", "store_replica"]

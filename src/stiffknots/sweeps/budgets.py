@@ -30,21 +30,18 @@ full       4         60,000,000  12    2     Langevin 10⁶ steps,    tube ≈ 1
                                              up to 32, 4 legs       12; bead ≈ 4 a replica
 =========  ========  ==========  ====  ====  =====================  ========================
 
-Why the Langevin bead search (2026-12-05, tenth session; bench/RESULTS.md): on 18 knots of 9
-and 10 crossings (9_1, 9_7, …, 9_49, 10_1, 10_21, …, 10_161; both models, seed 0) the
-annealing's bead ensembles (2 × 15 M moves, up to 6) converged 6 of 18 for 800 own CPU s,
-the Langevin ones (up to 16 replicas of 10⁶ steps, 4.0 CPU s each) 13 of 18 for 607 CPU s,
-with lower grounds for 10 knots and higher ones for 4; capped at 6 replicas they would have
-converged 10 for 323 CPU s. Both searches left two verdicts above the other's lowest state.
+Why the Langevin bead search (docs/methods/search.md): on 18 knots of 9 and 10 crossings
+(9_1, 9_7, …, 9_49, 10_1, 10_21, …, 10_161; both models, seed 0) the annealing's bead
+ensembles (2 × 15 M moves, up to 6) converged 6 of 18 for 800 own CPU s, the Langevin ones
+(up to 16 replicas of 10⁶ steps, 4.0 CPU s each) 13 of 18 for 607 CPU s, with lower grounds
+for 10 knots and higher ones for 4; capped at 6 replicas they would have converged 10 for
+323 CPU s. Both searches left two verdicts above the other's lowest state.
 The tube ensembles' settings, and so their stored replicas, are the same under both.
 
-Measurements behind the tube rows (2026-11-29, ``bench/defaults_survey.py``: the same
-replicas — 15 M moves, polished — through ``stiffknots anneal``, 35 knots through 8
-crossings): 7–13 CPU seconds per replica; about half the knots converge with their first two
-replicas. The 249-knot atlas (498 (knot, model) pairs) with the annealing's bead ensembles
-took 4.56 h on two cores (bench/RESULTS.md, 2026-12-03, fifth session); the README says what
-the current default takes. Before 2026-11-29 ``default`` was 4 × 30 M moves of the
-uniform-length crankshafts (≈ 76 CPU s per pair, 5.3 h).
+Measurements behind the tube rows (``bench/defaults_survey.py``: the same replicas — 15 M
+moves, polished — through ``stiffknots anneal``, 35 knots through 8 crossings): 7–13 CPU
+seconds per replica; about half the knots converge with their first two replicas. What the
+whole atlas takes at each budget: docs/atlas.md.
 """
 
 from __future__ import annotations
@@ -69,7 +66,7 @@ BEAD_SEARCHES = ("annealing", "langevin")
 #: ended at its parent's ε in three (10_100, 10_102, 10_104: the hops at ``t_hop`` do not
 #: leave a bead-rule registry minimum), 0.07 % lower and still 0.82 % above the lowest in one
 #: (10_10), and at the lowest in two whose parent and lowest are both seeded replicas (10_101,
-#: 10_106: a seeded search cannot certify); none converged (bench/RESULTS.md, sixth session)
+#: 10_106: a seeded search cannot certify); none converged (docs/history.md)
 LEG_EXCLUSIONS = ("tube",)
 
 #: CPU seconds per million attempted moves of one replica at N = 150 under the default
@@ -196,7 +193,7 @@ def budget_of(name: str, *, replicas: int | None = None, moves: int | None = Non
     of a Langevin bead replica where ``bead_steps`` is given (the name and the caps stay; the
     replicas are another ensemble: the steps are part of their settings).
 
-    Why a deeper bead search is offered (2026-12-05, twelfth session; bench/RESULTS.md): on
+    Why a deeper bead search is offered (docs/methods/search.md): on
     24 knots whose 16 Langevin replicas of 10⁶ steps never converged in the 249-knot atlas,
     4 replicas of 3·10⁶ steps converged 6 and reached states up to 8 % lower (10_30: 267.18
     against 291.09) — and for 12 of the 24 stayed higher: the bead rule's landscape there has

@@ -15,18 +15,16 @@ replica reached.
 
 Why the seeded replicas confirm but do not certify: they come from the tube model's
 landscape, whose funnels lead reproducibly to one bead-rule minimum each, so two of them agree
-easily on a state the bead rule's own searches go below. Measured (2026-12-03, third
-session): with seeded replicas counted like the others, 10_5's bead ensemble "converged" at
+easily on a state the bead rule's own searches go below. Measured: with seeded replicas
+counted like the others, 10_5's bead ensemble "converged" at
 203.22 on two seeded replicas, where a bead search of an earlier sweep reached 202.57; the
 same route inside ``anneal`` "converged" 7_5 at 183.65 and 6_3 at 163.71, whose bead searches
-reach 176.98 and 160.50 (bench/RESULTS.md). A seeded replica still lowers the ground where it
+reach 176.98 and 160.50 (docs/history.md). A seeded replica still lowers the ground where it
 is lowest, and agrees with a bead search as a second opinion.
 
 A stored *state* groups replicas of one shape within 1 % (for the tables of metastable
-states); the rule counts only those of its members within 0.1 % of its lowest (``eps_all``).
-Before 2026-12-02 it asked the whole 1 % group to lie within 0.1 % instead, so four replicas
-at one minimum and a fifth 0.13 % above were "not converged" (5_1, bead rule), and the
-``db grounds`` table counted the group without its spread at all.
+states); the rule counts only those of its members within 0.1 % of its lowest (``eps_all``):
+four replicas at one minimum and a fifth 0.13 % above it are converged.
 """
 
 from __future__ import annotations
@@ -131,6 +129,6 @@ def ensemble_converged(states: Mapping[str, Any], starts: Sequence[str] | None =
     ensemble asks for the knot's default starts, the shapes §VII conjectures for it) has had
     a replica — the solver's rule too (:func:`stiffknots.problems.base.verdict`): on 4_1
     braid and cage agree at the cage's 128.384 while every search from the 80 ends lower
-    (bench/RESULTS.md, 2026-12-03)."""
+    (docs/history.md)."""
     ground = states.get("ground") if "ground" in states else states
     return is_converged(ground) and not untried_starts(states, starts)

@@ -7,7 +7,7 @@ and their distance is at least those segments', ≥ w ≥ d. So every tube repli
 a bead-rule chain, and the bead rule's minimum lies at or below any of them polished under the
 bead rule. The bead rule's many contact registries make its Monte Carlo searches glassy: on
 10_4 (N = 150, d = w = 1/√2) six bead searches ended at 260.73 or above while the tube
-ground, 223.89, polished under the bead rule ends at 210.76 (bench/RESULTS.md, 2026-12-03).
+ground, 223.89, polished under the bead rule ends at 210.76 (docs/history.md).
 The tube model's smoother landscape is a better search of the bead rule's: a tube annealing,
 then a bead-rule polish.
 
@@ -39,7 +39,7 @@ import numpy as np
 from stiffknots._version import __version__
 from stiffknots.store import ReplicaKey, Store, row_from_replica, search_of, settings_hash
 from stiffknots.sweeps.convergence import SEEDED_START  # its ``start``
-from stiffknots.sweeps.models import Model
+from stiffknots.width import Width
 
 __all__ = ["OLDER_SEEDED_REPLICA", "SEEDED_REPLICA", "SEEDED_START", "seed_from_tube", "seed_pairs"]
 
@@ -69,14 +69,14 @@ class _Seeded:
     polish: dict = field(default_factory=dict)
 
 
-def seed_pairs(models: Sequence[Model]) -> list[tuple[Model, Model]]:
+def seed_pairs(models: Sequence[Width]) -> list[tuple[Width, Width]]:
     """(bead model, tube model) pairs of a sweep whose tube chains are bead-admissible: the
     same N and w ≥ d."""
     return [(b, t) for b in models if b.exclusion == "bead" for t in models
             if t.exclusion == "tube" and t.beads == b.beads and t.thickness >= b.thickness]
 
 
-def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
+def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Width],
                    settings: Mapping[str, Mapping[str, Any]], seed: int,
                    budget: str | None = None) -> list[dict]:
     """Store, for every knot and :func:`seed_pairs` pair, a bead replica seeded from each of
@@ -102,8 +102,8 @@ def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
     """
     out = []
     for bead, tube in seed_pairs(models):
-        bset = dict(settings[bead.name])
-        bh, th = settings_hash(bset), settings_hash(settings[tube.name])
+        bset = dict(settings[bead.exclusion])
+        bh, th = settings_hash(bset), settings_hash(settings[tube.exclusion])
         for knot in knots:
             # this sweep's tube replicas only (its seed): another sweep's would make the bead
             # ensemble depend on which sweep ran first
@@ -126,7 +126,7 @@ def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Model],
     return out
 
 
-def _seed_one(store: Store, knot: str, bead: Model, tube: Model, low: Mapping[str, Any],
+def _seed_one(store: Store, knot: str, bead: Width, tube: Width, low: Mapping[str, Any],
               key: ReplicaKey, bset: Mapping[str, Any], th: str, searched: float | None,
               budget: str | None) -> dict:
     """Polish one stored tube replica ``low`` under the bead rule, verify and store it under
@@ -139,7 +139,7 @@ def _seed_one(store: Store, knot: str, bead: Model, tube: Model, low: Mapping[st
     t0, c0 = time.perf_counter(), time.process_time()
     res = polish(store.coords(low["id"]), exclusion="bead", d=bead.thickness)
     ok, found = verify_knot(res.pos, knot)
-    entry = {"knot": knot, "model": bead.name, "tube_replica": int(low["replica"]),
+    entry = {"knot": knot, "model": bead.exclusion, "tube_replica": int(low["replica"]),
              "tube_epsilon": low["epsilon"], "bead_epsilon": searched, "epsilon": None,
              "written": False}
     if not ok:  # never expected: the polish cannot pass strands (its proof)
@@ -161,10 +161,9 @@ def _seed_one(store: Store, knot: str, bead: Model, tube: Model, low: Mapping[st
                 "grad_norm": res.grad_norm, "reason": res.reason})
     shape = classify(res.pos, True, d=bead.thickness)
     row, coords = row_from_replica(
-        rep, knot=knot, exclusion="bead", thickness=bead.thickness, seed=key.seed,
-        settings=bset, beads=bead.beads, shape=shape.label, multiplicity=shape.multiplicity,
-        problem=bset["problem"],
-        extra={"model": bead.name, "budget": budget, "width": bead.width()["text"],
+        rep, knot=knot, width=bead, seed=key.seed, settings=bset, shape=shape.label,
+        multiplicity=shape.multiplicity, problem=bset["problem"],
+        extra={"model": bead.exclusion, "budget": budget, "width": bead.text,
                "shape_reason": shape.reason,
                # one search with the tube search it comes from: a tube leg's seed and its
                # parent's are not two opinions (:mod:`stiffknots.sweeps.legs`)

@@ -17,7 +17,7 @@ now second. Measured on the 249-knot atlas run (tube w = 1/√2, N = 150; one le
 second-lowest replica of six near misses whose two lowest searches lay 0.10–0.16 % apart):
 4 of 6 legs ended within 0.1 % of the lowest (10_25, 10_136, 10_165) or below it by less
 (10_24, −0.08 %), one stayed where it began (10_28), one went 0.77 % below (9_39)
-(bench/RESULTS.md, sixth session).
+(docs/history.md).
 
 Langevin legs of the bead rule. A Langevin bead ensemble (the default budget's) still not
 converged at its cap gets up to ``budget.bead_legs`` legs
@@ -30,7 +30,7 @@ the 249-knot atlas (a probe: one leg from each of the four lowest own searches):
 for 488 CPU s; reheated to 10⁻², 6 converged and 28 grounds went lower alone. The default
 budget's legs on that atlas (the same command resumed): 377 legs, 511 CPU s, 153 → 158
 verdicts (the atlas's replicas 12 → 16 converted 11 for 1,660 CPU s) — of which two lie above
-a deeper search's lowest (bench/RESULTS.md, 2026-12-05, thirteenth session).
+a deeper search's lowest (docs/history.md).
 
 Searches. Every stored replica belongs to one search: a fresh replica (or a seeded one,
 :mod:`stiffknots.sweeps.cross`) is its own, a leg belongs to the search it continued —

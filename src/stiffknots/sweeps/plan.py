@@ -20,9 +20,9 @@ spend a replica on a state known to lie above it), shared round-robin among the 
 (replica r gets start r mod k) — except the replicas added to a (knot, model) not converged
 from replica :data:`FAVOUR_FROM` on (by then every start has had a replica): they start from
 the embedding of the lowest replica stored before them (:func:`favoured_start`), the funnel
-likeliest to hold the ground state a second time (measured in ``anneal``, bench/RESULTS.md,
-2026-12-02). The settings record the policy (``"start": "braid,cage,eighty;added:lowest"``),
-each stored row the start its replica got.
+likeliest to hold the ground state a second time (measured in ``anneal``,
+docs/methods/search.md). The settings record the policy
+(``"start": "braid,cage,eighty;added:lowest"``), each stored row the start its replica got.
 """
 
 from __future__ import annotations
@@ -37,7 +37,8 @@ from stiffknots.problems import validate as V
 from stiffknots.problems.base import Job
 from stiffknots.store import ReplicaKey, Store, canonical_json, settings_hash
 from stiffknots.sweeps.budgets import Budget
-from stiffknots.sweeps.models import Model
+from stiffknots.sweeps.models import params_of
+from stiffknots.width import Width
 
 __all__ = ["PROBLEM", "START_POLICY", "FAVOUR_FROM", "SweepJob", "sweep_settings",
            "resolve_knots", "plan_sweep", "pending", "sweep_starts", "favoured_start",
@@ -53,16 +54,16 @@ START_POLICY = "braid,cage,eighty;added:lowest"
 FAVOUR_FROM = 3
 
 
-def sweep_settings(model: Model, budget: Budget) -> dict[str, Any]:
+def sweep_settings(model: Width, budget: Budget) -> dict[str, Any]:
     """The settings of every replica of ``model`` under ``budget`` (the input of the key's
-    settings hash): ``AnnealSettings(moves, schedule, params=model.params()).as_dict()``, the
+    settings hash): ``AnnealSettings(moves, schedule, params=params_of(model)).as_dict()``, the
     moves and schedule of :meth:`Budget.search_of <stiffknots.sweeps.budgets.Budget.search_of>`
     (the annealing, or the Langevin dynamics of a Langevin bead ensemble) —
     built as ClosedAnneal builds them, which :func:`build_jobs` checks — plus
     ``problem`` and ``start`` (:func:`stiffknots.store.keys.settings_hash` says what belongs
     there)."""
     moves, schedule = budget.search_of(model)
-    s = AnnealSettings(moves=moves, schedule=schedule, params=model.params())
+    s = AnnealSettings(moves=moves, schedule=schedule, params=params_of(model))
     s.validate()
     # every replica is polished to its local minimum (problems.base.polish_run)
     return {**s.as_dict(), "problem": PROBLEM, "start": START_POLICY, "polish": True}
@@ -76,7 +77,7 @@ class SweepJob:
     ----------
     knot : str
         Catalogue name.
-    model : Model
+    model : Width
     replica : int
     seed : int
         The sweep's seed (the replica's own seed derives from it and ``replica``).
@@ -91,7 +92,7 @@ class SweepJob:
     """
 
     knot: str
-    model: Model
+    model: Width
     replica: int
     seed: int
     settings: dict = field(compare=False, hash=False, repr=False)
@@ -109,9 +110,9 @@ class SweepJob:
         if self.parent is not None:
             from stiffknots.sweeps.legs import LEG_REPLICA
 
-            return (f"{self.knot}/{self.model.name}/leg {self.replica - LEG_REPLICA + 1} of "
+            return (f"{self.knot}/{self.model.exclusion}/leg {self.replica - LEG_REPLICA + 1} of "
                     f"r{self.parent['search']}")
-        return f"{self.knot}/{self.model.name}/r{self.replica}"
+        return f"{self.knot}/{self.model.exclusion}/r{self.replica}"
 
     @property
     def task_key(self) -> str:
@@ -123,7 +124,7 @@ class SweepJob:
     @property
     def group(self) -> tuple[str, str]:
         """(knot, model name): the jobs of one problem."""
-        return self.knot, self.model.name
+        return self.knot, self.model.exclusion
 
 
 def resolve_knots(knots: Iterable[str] | None = None, max_crossings: int | None = None
@@ -167,7 +168,7 @@ def resolve_knots(knots: Iterable[str] | None = None, max_crossings: int | None 
     return sorted(dict.fromkeys(names), key=knot_sort_key)
 
 
-def plan_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget,
+def plan_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget,
                seed: int = 0) -> list[SweepJob]:
     """Every job of a sweep, knot-major (all replicas of a knot's models, then the next
     knot). Cheap: nothing is built, no embedding is made.
@@ -233,7 +234,7 @@ def favoured_start(store: Store, job: SweepJob, before: int) -> str | None:
     return min(rows, key=lambda r: (r["epsilon"], r["replica"]))["start"]
 
 
-def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
+def build_jobs(knot: str, model: Width, budget: Budget, seed: int,
                settings: Mapping[str, Any], start: str | None = None) -> dict[int, Job]:
     """The problem's jobs of one (knot, model): replica → :class:`~stiffknots.problems.base.Job`
     (:func:`build_problem`'s jobs)."""
@@ -241,7 +242,7 @@ def build_jobs(knot: str, model: Model, budget: Budget, seed: int,
                                                 start).jobs()}
 
 
-def build_problem(knot: str, model: Model, budget: Budget, seed: int,
+def build_problem(knot: str, model: Width, budget: Budget, seed: int,
                   settings: Mapping[str, Any], start: str | None = None) -> Any:
     """The problem of one (knot, model): a :class:`~stiffknots.problems.closed.ClosedAnneal`.
 
@@ -271,12 +272,12 @@ def build_problem(knot: str, model: Model, budget: Budget, seed: int,
         starts = [start] * budget.replicas
     moves, schedule = budget.search_of(model)
     problem = ClosedAnneal(k.name, beads=model.beads, moves=moves, schedule=schedule,
-                           replicas=budget.replicas, seed=seed, params=model.params(),
+                           replicas=budget.replicas, seed=seed, params=params_of(model),
                            start=starts, rounds=1, polish=settings.get("polish", True),
                            tube_route=False)  # a sweep seeds its bead ensembles instead
     mine = {key: v for key, v in settings.items()
             if key not in ("problem", "start", "polish")}
     if canonical_json(problem.settings.as_dict()) != canonical_json(mine):
-        raise RuntimeError(f"the settings of {knot}/{model.name} differ from the sweep's key "
+        raise RuntimeError(f"the settings of {knot}/{model.exclusion} differ from the sweep's key "
                            "settings; this is a bug in stiffknots, please report it")
     return problem

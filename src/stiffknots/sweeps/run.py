@@ -58,7 +58,6 @@ from stiffknots.sweeps.cluster import (
 from stiffknots.sweeps.convergence import ensemble_converged as converged_with_every_start
 from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube, seed_pairs
 from stiffknots.sweeps.legs import LEG_REPLICA, leg_job
-from stiffknots.sweeps.models import Model
 from stiffknots.sweeps.plan import (
     SweepJob,
     favoured_start,
@@ -66,6 +65,7 @@ from stiffknots.sweeps.plan import (
     plan_sweep,
     sweep_settings,
 )
+from stiffknots.width import Width
 
 __all__ = ["SweepListener", "SweepResult", "run_sweep", "store_replica", "ensemble_converged",
            "expected_todo"]
@@ -127,7 +127,7 @@ class SweepResult:
     """
 
     knots: list[str]
-    models: list[Model]
+    models: list[Width]
     budget: Budget
     seed: int
     settings_hash: dict[str, str]
@@ -163,8 +163,8 @@ class SweepResult:
         return not self.interrupted and not self.failed and self.ran == self.todo
 
     def to_dict(self) -> dict:
-        return {"knots": self.knots, "models": [m.name for m in self.models],
-                "widths": {m.name: m.width() for m in self.models},
+        return {"knots": self.knots, "models": [m.exclusion for m in self.models],
+                "widths": {m.exclusion: m.as_dict() for m in self.models},
                 "budget": self.budget.as_dict(), "seed": self.seed,
                 "settings_hash": self.settings_hash, "jobs": self.jobs,
                 "skipped": self.skipped, "ran": self.ran, "left": self.left,
@@ -187,20 +187,19 @@ def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | No
     from stiffknots.analysis import classify
 
     shape = classify(replica.coords, True, d=job.model.thickness)
-    width = job.model.width()
-    extra = {"model": job.model.name, "budget": budget, "width": width["text"],
+    extra = {"model": job.model.exclusion, "budget": budget, "width": job.model.text,
              "shape_reason": shape.reason}
     if job.parent is not None:  # a continuation leg (:mod:`stiffknots.sweeps.legs`)
         extra.update(search=job.parent["search"], leg_of=job.parent["replica"],
                      leg_parent_epsilon=job.parent["epsilon"])
     row, coords = row_from_replica(
-        replica, knot=job.knot, exclusion=job.model.exclusion, thickness=job.model.thickness,
-        seed=job.seed, settings=job.settings, beads=job.model.beads, shape=shape.label,
-        multiplicity=shape.multiplicity, problem=job.settings["problem"], extra=extra)
+        replica, knot=job.knot, width=job.model, seed=job.seed, settings=job.settings,
+        shape=shape.label, multiplicity=shape.multiplicity, problem=job.settings["problem"],
+        extra=extra)
     return store.put(row, coords), row
 
 
-def ensemble_converged(store: Store, knot: str, model: Model, settings_hash: str) -> bool:
+def ensemble_converged(store: Store, knot: str, model: Width, settings_hash: str) -> bool:
     """Whether one stored (knot, model) ensemble is converged — its ground state by the rule,
     after a replica from every default start
     (:func:`~stiffknots.sweeps.convergence.ensemble_converged`); False when nothing is
@@ -264,7 +263,7 @@ def _jobs_of(g: Mapping[str, Any]) -> int:
             + max(g.get("legs", 0), g.get("stored_legs", 0)))
 
 
-def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, store: Store, *,
+def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, store: Store, *,
               seed: int = 0, scheduler: str | None = None, workers: int | None = None,
               max_replicas: int | None = None, step: int = 2,
               listener: SweepListener | None = None, run: bool = True) -> SweepResult:
@@ -274,7 +273,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
     ----------
     knots : sequence of str
         Catalogue names (:func:`~stiffknots.sweeps.plan.resolve_knots`).
-    models : sequence of Model
+    models : sequence of Width
         E.g. :func:`~stiffknots.sweeps.models.parse_models` ``("bead,tube")``.
     budget : Budget
         Replicas and moves (:mod:`stiffknots.sweeps.budgets`).
@@ -325,13 +324,13 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         max_replicas = V.integer("max_replicas", max_replicas, budget.replicas,
                                  V.MAX_REPLICAS)
     #: model name → the most replicas of its ensembles
-    most = {m.name: (budget.most_replicas(m) if max_replicas is None else max_replicas)
+    most = {m.exclusion: (budget.most_replicas(m) if max_replicas is None else max_replicas)
             for m in models}
     max_r = max(most.values(), default=budget.replicas)
     step = V.integer("step", step, 1, V.MAX_REPLICAS)
     jobs = plan_sweep(knots, models, budget, seed)
     res = SweepResult(list(knots), list(models), budget, int(seed),
-                      {m.name: settings_hash(sweep_settings(m, budget)) for m in models},
+                      {m.exclusion: settings_hash(sweep_settings(m, budget)) for m in models},
                       jobs=len(jobs), scheduler=scheduler or "local", max_replicas=max_r)
     todo = pending(jobs, store)
     res.skipped = len(jobs) - len(todo)
@@ -352,7 +351,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         groups[j.group]["open"] += 1
     # what a resumed sweep has stored already (fresh replicas, legs), for the jobs expected
     # only: a (knot, model) not yet judged again still counts its stored replicas
-    by_model = {(m.exclusion, m.beads, res.settings_hash[m.name]): m.name for m in models}
+    by_model = {(m.exclusion, m.beads, res.settings_hash[m.exclusion]): m.exclusion for m in models}
     stored_keys = (store.keys(settings_hash=sorted(res.settings_hash.values()),
                               seed=[res.seed]) if jobs else set())
     for k in stored_keys:
@@ -366,9 +365,9 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
 
     def extend(g: dict) -> list[SweepJob]:
         """The replicas to add to a (knot, model) whose replicas have all ended."""
-        top = most[g["model"].name]
+        top = most[g["model"].exclusion]
         while g["replicas"] < top and not ensemble_converged(
-                store, g["knot"], g["model"], res.settings_hash[g["model"].name]):
+                store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion]):
             n = min(top, g["replicas"] + step)
             more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
                               seed)[g["replicas"]:]
@@ -383,7 +382,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
                 return new
         legs = budget.legs_of(g["model"])
         while g["legs"] < legs and not ensemble_converged(
-                store, g["knot"], g["model"], res.settings_hash[g["model"].name]):
+                store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion]):
             template = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=1),
                                   seed)[0]
             leg = leg_job(store, template, g["legs"], langevin=budget.langevin(g["model"]))
@@ -404,11 +403,11 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         listener.expected(expected_todo(groups, res.todo, budget.replicas),
                           sum(1 for g in groups.values() if g["settled"]))
 
-    settings = {m.name: sweep_settings(m, budget) for m in res.models}
+    settings = {m.exclusion: sweep_settings(m, budget) for m in res.models}
     # bead model → the tube models whose replicas seed it (:mod:`stiffknots.sweeps.cross`)
     tubes_of: dict[str, list[str]] = {}
     for b, t in seed_pairs(res.models):
-        tubes_of.setdefault(b.name, []).append(t.name)
+        tubes_of.setdefault(b.exclusion, []).append(t.exclusion)
     early: list[dict] = []  # seeded before the listener was told the plan
 
     def seed_knot(knot: str) -> None:
@@ -432,7 +431,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Model], budget: Budget, sto
         that tube replicas seed waits for them: its verdict counts the seeded replicas, so it
         is judged only once its tube ensembles have settled (and have been seeded); the
         settling of a tube ensemble judges the bead ensembles waiting on it."""
-        tubes = [groups[(g["knot"], t)] for t in tubes_of.get(g["model"].name, ())]
+        tubes = [groups[(g["knot"], t)] for t in tubes_of.get(g["model"].exclusion, ())]
         if any(not t["settled"] for t in tubes):
             g["waiting"] = True
             return []

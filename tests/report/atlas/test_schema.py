@@ -4,7 +4,7 @@ family statistics counted from it."""
 
 import pytest
 
-from stiffknots.report.atlas import family_statistics, write_atlas
+from stiffknots.report.atlas import family_statistics, format_width, write_atlas
 
 
 def test_family_statistics_from_the_knots(knots):
@@ -48,3 +48,12 @@ def test_input_errors_say_what_is_wrong(tmp_path, knots):
     with pytest.raises(ValueError, match="needs 'structure' .* and 'knots'"):
         write_atlas(tmp_path, knots, families=fam)
     assert not (tmp_path / "index.html").exists()
+
+
+def test_format_width_reads_one_width_as_object_dict_or_text():
+    from stiffknots.width import Width
+
+    w = Width.tube(173, w_over_L=0.004)
+    assert format_width(w) == format_width(w.as_dict()) == w.text
+    assert format_width("bead rule d = 1/√2, N = 150") == "bead rule d = 1/√2, N = 150"
+    assert format_width({"w/L": 0.01}) == "w/L = 0.01"

@@ -17,6 +17,7 @@ from threadpoolctl import threadpool_limits
 from stiffknots.engine.polish.pieces import _min_clearance
 from stiffknots.engine.polish.problem import EXCLUSIONS, _Problem
 from stiffknots.engine.polish.sqp import ACTIVE_TOL, _Polisher
+from stiffknots.width import BEAD_D
 
 BOND_TOL_IN = 1e-8  # input bonds must be unit to this (the output is unit to ~1e-14)
 
@@ -124,8 +125,8 @@ def polish(
     *,
     closed: bool = True,
     exclusion: str = "bead",
-    d: float = float(1 / np.sqrt(2)),
-    w: float = float(1 / np.sqrt(2)),
+    d: float = BEAD_D,
+    w: float = BEAD_D,
     clamp_ends: int | None = None,
     max_iter: int = 200,
     tol: float = 1e-10,

@@ -91,6 +91,7 @@ from typing import Any
 import numpy as np
 
 from stiffknots.theory import closed_bounds
+from stiffknots.width import Width
 
 __all__ = [
     "ZONE_KINDS",
@@ -174,9 +175,10 @@ def format_width(width: Any) -> str:
 
     Parameters
     ----------
-    width : str or mapping
-        A description (``"bead rule d = 1/√2, N = 150"``), or a mapping of named values
-        (``{"w/L": 0.01}`` → ``"w/L = 0.01"``).
+    width : Width, str or mapping
+        A :class:`~stiffknots.width.Width` or its :meth:`~stiffknots.width.Width.as_dict`
+        (→ its ``text``), a description (``"bead rule d = 1/√2, N = 150"``), or a mapping of
+        named values (``{"w/L": 0.01}`` → ``"w/L = 0.01"``).
 
     Returns
     -------
@@ -187,8 +189,12 @@ def format_width(width: Any) -> str:
     ValueError
         For a bare number or anything else that does not say what the width is.
     """
+    if isinstance(width, Width):
+        return width.text
     if isinstance(width, str) and width.strip():
         return width.strip()
+    if isinstance(width, Mapping) and {"exclusion", "beads", "w_over_L"} <= set(width):
+        return Width.from_dict(width).text
     if isinstance(width, Mapping) and width:
         parts = []
         for k, v in width.items():
