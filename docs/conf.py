@@ -80,6 +80,33 @@ nitpick_ignore_regex = [
                  r"|NDArray|ArrayLike|Self)"),
 ]
 
+
+def _prefer_submodules() -> None:
+    """A package that imports a function or object under the name of one of its submodules
+    (``stiffknots.problems.tightest``, the function; ``stiffknots.cli.app``, the Typer app;
+    ``stiffknots.cli.main``) hides that submodule from autosummary, which reads
+    ``package.name`` as an attribute first: the recursion would document the function under
+    the module's name and never the module. A name that imports as a stiffknots module is
+    read as that module."""
+    import importlib
+
+    from sphinx.ext import autosummary
+
+    by_attribute = autosummary._import_by_name
+
+    def _import_by_name(name: str, grouped_exception: bool = True):
+        if name.startswith("stiffknots."):
+            try:
+                return importlib.import_module(name), None, name
+            except ImportError:
+                pass
+        return by_attribute(name, grouped_exception)
+
+    autosummary._import_by_name = _import_by_name
+
+
+_prefer_submodules()
+
 # --- HTML ----------------------------------------------------------------------------------
 html_theme = "furo"
 html_title = f"stiffknots {release}"
@@ -143,12 +170,17 @@ def _resolve_through_imports(app, env, node, contnode):
     for dotted in candidates:
         if not dotted.startswith("stiffknots."):
             continue
-        defined = _defining_name(_import_dotted(dotted))
-        if defined is None and "." in dotted:  # a class's field or data: where the class is
+        obj = _import_dotted(dotted)
+        defined = _defining_name(obj)
+        if defined is None and obj is not None and "." in dotted:
             head, _, last = dotted.rpartition(".")
             owner = _import_dotted(head)
-            if isinstance(owner, type) and _defining_name(owner):
+            if isinstance(owner, type) and _defining_name(owner):  # a class's field
                 defined = f"{_defining_name(owner)}.{last}"
+            else:  # a constant: the documented one of that name that is this very object
+                same = [name for name in domain.objects
+                        if name.rpartition(".")[2] == last and _import_dotted(name) is obj]
+                defined = same[0] if len(same) == 1 else None
         if defined and defined != dotted and defined in domain.objects:
             return domain.resolve_xref(env, node["refdoc"], app.builder, node["reftype"], defined,
                                        node, contnode)
