@@ -59,6 +59,7 @@ import numpy as np
 
 from stiffknots.errors import InvalidParameter
 
+#: the kinds of :class:`Schedule`, by name
 SCHEDULES = ("power", "geometric", "tempering", "langevin")
 
 
