@@ -121,7 +121,8 @@ def check(chain: Any, closed: bool | None = None, *, d: float = BEAD_D,
 
     Returns
     -------
-    ChainCheck — ``ok`` and ``problems`` summarise it.
+    ChainCheck
+        ``ok`` and ``problems`` summarise it.
     """
     if closed is None:
         closed = bool(getattr(chain, "closed", True))
