@@ -80,7 +80,8 @@ def open_from_closed(x: np.ndarray, arm: int = 1, tail: int = 3, cut: int = 0) -
 
     Returns
     -------
-    (N, 3) open chain, bead 0 at the bottom of the z axis, bead N−1 at the top.
+    ndarray
+        (N, 3) open chain, bead 0 at the bottom of the z axis, bead N−1 at the top.
     """
     x = np.asarray(x, dtype=float)
     if arm < 1 or tail < 2:
@@ -140,7 +141,8 @@ def embed_open(word, n_strands: int | None = None, n_knot_beads: int = 60, *, ar
 
     Returns
     -------
-    (N, 3) open chain; bonds are unit, beads 0, 1, N−2, N−1 on the z axis.
+    ndarray
+        (N, 3) open chain; bonds are unit, beads 0, 1, N−2, N−1 on the z axis.
     """
     from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
 
