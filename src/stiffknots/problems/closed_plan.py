@@ -238,7 +238,8 @@ def plan_anneal(knot: Knot | str, *, beads: int | None = None, moves: int | None
     coarse : int or None
         Anneal first at this many beads and start the fine run from the lowest chain
         (:meth:`AnnealPlan.coarse_start`).
-    The others: :class:`~stiffknots.problems.closed.ClosedAnneal`.
+    moves, replicas, seed, checkpoint_dir, resume, start, polish, tube_route
+        The others: :class:`~stiffknots.problems.closed.ClosedAnneal`.
 
     Raises
     ------

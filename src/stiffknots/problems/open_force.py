@@ -212,8 +212,8 @@ def anneal_open_force(knot: str, force: float, n_beads: int | None = None,
     n_beads : int or None
         Beads of the chain: the open embedding is lengthened along the axis to this many
         (default: by ⌈L_e/4⌉ beads at each end, see :func:`start_chain`).
-    moves, replicas, seed, params, workers, quench_fraction, on_replica_done :
-        as for :func:`stiffknots.problems.open_extension.anneal_open`.
+    moves, replicas, seed, params, workers, quench_fraction, on_replica_done
+        As for :func:`stiffknots.problems.open_extension.anneal_open`.
     schedule : Schedule or None
         Default :func:`default_force_schedule` (geometric, no relaxation stage).
     excess_length : int or None
@@ -230,8 +230,9 @@ def anneal_open_force(knot: str, force: float, n_beads: int | None = None,
 
     Returns
     -------
-    ForceResult — replicas sorted by E_d − F·Δz; ``excess_length`` (measured), ``eps_e``,
-    ``tension`` (μ = E_d/L_e), ``force``, ``force_balance`` (μ/F), ``shape()``.
+    ForceResult
+        Replicas sorted by E_d − F·Δz; ``excess_length`` (measured), ``eps_e``,
+        ``tension`` (μ = E_d/L_e), ``force``, ``force_balance`` (μ/F), ``shape()``.
 
     Raises
     ------

@@ -172,8 +172,8 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
 
     Returns
     -------
-    TightResult — ``length_over_R`` of the best replica and the bounds 2πn ≤ L†/R ≤
-    2π min(7n/3, i).
+    TightResult
+        ``length_over_R`` of the best replica and the bounds 2πn ≤ L†/R ≤ 2π min(7n/3, i).
     """
     problem = Tightest(knot, beads, moves, replicas, seed, exclusion=exclusion, d=d, w=w,
                        powers=powers, start=start)
