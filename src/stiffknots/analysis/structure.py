@@ -761,7 +761,7 @@ def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
     ----------
     coords, closed
         The chain (bead positions, shape (N, 3)) and whether it is closed.
-    d, factor, cutoff, min_sep :
+    d, factor, cutoff, min_sep
         Contact rule, see :func:`~stiffknots.analysis.contacts.contact_map`.
     min_length : float, optional
         Shortest line-braid (arc length, bond units); default ``max(3 × cutoff, 0.1 L)``.

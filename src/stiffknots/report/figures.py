@@ -377,7 +377,14 @@ def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
     labels, title
         As for :func:`plot_eps_vs_n2`.
 
-    Returns the matplotlib Axes; ValueError if a point lacks a field or has ``L_e <= 0``.
+    Returns
+    -------
+    matplotlib Axes
+
+    Raises
+    ------
+    ValueError
+        If a point lacks a field or has ``L_e <= 0``.
     """
     pts = _points(points, ("knot", "L_e", "mu", "n"))
     ax = _new_ax(ax)

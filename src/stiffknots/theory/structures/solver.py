@@ -555,8 +555,9 @@ def richardson(values: Sequence[float], ratio: float = 2.0, orders: int | None =
 
     Returns
     -------
-    (n, k+1) array ``R`` with ``R[j, k]`` the value with ``K^-2, ..., K^-2k`` removed using
-    levels ``j-k .. j`` (``nan`` where undefined).
+    ndarray
+        (n, k+1) array ``R`` with ``R[j, k]`` the value with ``K^-2, ..., K^-2k`` removed
+        using levels ``j-k .. j`` (``nan`` where undefined).
     """
     v = np.asarray(values, dtype=float)
     n = len(v)
