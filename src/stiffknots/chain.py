@@ -246,7 +246,7 @@ class Chain:
     # -- dict form ----------------------------------------------------------------------------
 
     def to_dict(self) -> dict:
-        """JSON-ready dict of the ``stiffknots-chain`` format (see :func:`to_json`)."""
+        """JSON-ready dict of the ``stiffknots-chain`` format (see :func:`.to_json`)."""
         return {
             "format": FORMAT_NAME,
             "version": FORMAT_VERSION,

@@ -11,9 +11,10 @@ the chain is::
     c.ok, c.problems          # False, ['bond 17 has length 1.3 (unit bonds: ...)', ...]
     c.min_bead_distance, c.min_segment_distance, c.max_bond_error, c.knot_found
 
-The shape analysis (:func:`stiffknots.analysis.classify`, :func:`~stiffknots.analysis.
-analyse_structure`) warns (:class:`~stiffknots.errors.ChainWarning`) on a chain that is not a
-unit-bond chain obeying the bead rule; both use :func:`stiffknots.measures.chain_report`.
+The shape analysis (:func:`stiffknots.analysis.classify`,
+:func:`~stiffknots.analysis.analyse_structure`) warns (:class:`~stiffknots.errors.ChainWarning`)
+on a chain that is not a unit-bond chain obeying the bead rule; both use
+:func:`stiffknots.measures.chain_report`.
 
 The module sits above the catalogue and the analysis in the layers (the knot type needs the
 invariants of :mod:`stiffknots.knots.identify`); the geometric checks live below them, in
@@ -37,18 +38,29 @@ class ChainCheck:
 
     Attributes
     ----------
-    n_beads, closed : the chain.
-    bond_min, bond_max, max_bond_error : bond lengths and the largest |bond − 1|.
-    min_bead_distance : the smallest distance between beads at index distance ≥ 2 (the bead
+    n_beads, closed
+        The chain.
+    bond_min, bond_max, max_bond_error
+        Bond lengths and the largest ``|bond − 1|``.
+    min_bead_distance : float
+        The smallest distance between beads at index distance ≥ 2 (the bead
         rule's quantity; cyclic for a closed chain).
-    min_segment_distance : the smallest distance between segments sharing no bead (the tube's
+    min_segment_distance : float or None
+        The smallest distance between segments sharing no bead (the tube's
         quantity: a tube of diameter w fits only if it is ≥ w).
-    d, bond_tol : the bead rule's distance and the bond tolerance checked against.
-    unit_bonds, bead_rule : the two checks.
-    knot : the knot type asked for (None if not asked); knot_found : what the HOMFLY-PT
-        polynomial identifies (None unless asked; candidates joined by '|'); knot_ok : whether
-        ``knot`` is among them.
-    problems : one sentence per failed check.
+    d, bond_tol : float
+        The bead rule's distance and the bond tolerance checked against.
+    unit_bonds, bead_rule : bool
+        The two checks.
+    knot : str or None
+        The knot type asked for (None if not asked).
+    knot_found : str or None
+        What the HOMFLY-PT polynomial identifies (None unless asked; candidates joined by
+        ``'|'``).
+    knot_ok : bool or None
+        Whether ``knot`` is among them.
+    problems : tuple of str
+        One sentence per failed check.
     """
 
     n_beads: int
@@ -92,18 +104,25 @@ def check(chain: Any, closed: bool | None = None, *, d: float = BEAD_D,
 
     Parameters
     ----------
-    chain : a :class:`~stiffknots.chain.Chain` or bead coordinates, shape (N, 3).
-    closed : default: the Chain's own, True for coordinates.
-    d : the bead rule's distance (default 1/√2, the paper's); for the tube model pass the tube
+    chain
+        A :class:`~stiffknots.chain.Chain` or bead coordinates, shape (N, 3).
+    closed : bool or None
+        Default: the Chain's own, True for coordinates.
+    d : float
+        The bead rule's distance (default 1/√2, the paper's); for the tube model pass the tube
         diameter w (a tube of diameter w keeps beads at index distance ≥ 2 at least w apart).
-    bond_tol : largest allowed |bond − 1| (default 1e-6; annealed chains keep 1e-10).
-    knot : a knot name: also check that the chain has this knot type (HOMFLY-PT polynomial,
+    bond_tol : float
+        Largest allowed ``|bond − 1|`` (default 1e-6; annealed chains keep 1e-10).
+    knot : str or None
+        A knot name: also check that the chain has this knot type (HOMFLY-PT polynomial,
         mirror-insensitive; an open chain is closed along z first, §VIII).
-    identify : also identify the knot type without expecting one.
+    identify : bool
+        Also identify the knot type without expecting one.
 
     Returns
     -------
-    ChainCheck — ``ok`` and ``problems`` summarise it.
+    ChainCheck
+        ``ok`` and ``problems`` summarise it.
     """
     if closed is None:
         closed = bool(getattr(chain, "closed", True))

@@ -58,10 +58,15 @@ class InvalidParameter(UserInputError):
 
     Attributes
     ----------
-    param : the parameter's name in the Python API (``"force"``, ``"excess_length"``, ...).
-    value : the value given.
-    allowed : what is allowed, in words (``"a number > 0"``, ``"an integer in [8, 20000]"``).
+    param : str
+        The parameter's name in the Python API (``"force"``, ``"excess_length"``, ...).
+    value
+        The value given.
+    allowed : str
+        What is allowed, in words (``"a number > 0"``, ``"an integer in [8, 20000]"``).
 
+    Notes
+    -----
     The message reads ``"<param> must be <allowed>, got <value>"``; the command line re-words it
     with the option's name (:meth:`for_option`).
     """
@@ -89,9 +94,13 @@ class ParameterConflict(UserInputError):
 
     Attributes
     ----------
-    params : the parameters' names in the Python API (``("w", "w_over_L")``).
-    template : the message with one ``{}`` per parameter, in order.
+    params
+        The parameters' names in the Python API (``("w", "w_over_L")``).
+    template : str
+        The message with one ``{}`` per parameter, in order.
 
+    Notes
+    -----
     The command line re-words it with the options' names (:meth:`message`).
     """
 
@@ -156,8 +165,10 @@ class RunStopped(StiffKnotsError):  # noqa: N818 (not an error: a requested stop
 
     Attributes
     ----------
-    checkpoint : path of the checkpoint to resume from.
-    step, n_steps : chunks done so far and chunks in the whole plan.
+    checkpoint
+        Path of the checkpoint to resume from.
+    step, n_steps : int
+        Chunks done so far and chunks in the whole plan.
     """
 
     def __init__(self, checkpoint: Any, step: int, n_steps: int):

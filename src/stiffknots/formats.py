@@ -10,8 +10,9 @@ suffix              what it holds                          closure recorded by  
 ``.tsv`` ``.csv``   comma separated, optional header       vertex only
 ``.json``           ``stiffknots-chain`` (or a bare list   ``"closed"``          yes
                     of ``[x, y, z]``)                      (bare list: repeat)
-``.npz`` ``.npy``   ``coords`` [+ ``closed``, ``meta``];   ``closed`` (``.npy``: yes (``.npz``)
-                    ``.npy``: one (N, 3) array             repeat only)
+``.npz`` ``.npy``   ``coords`` [+ ``closed``, ``meta``];   ``closed``            yes (``.npz``)
+                    ``.npy``: one (N, 3) array             (``.npy``: repeat
+                                                           only)
 ``.obj``            ElasticKnots polyline (``v``, ``l``)   a loop of ``l``       yes
                                                            elements
 ``.vect``           Geomview VECT, one polyline            the sign of the       yes

@@ -202,20 +202,28 @@ def chain_report(coords: np.ndarray, closed: bool, d: float = BEAD_D, bond_tol: 
 
     Parameters
     ----------
-    coords : (N, 3) float64 array; closed : whether bead N−1 is bonded to bead 0.
-    d : the bead rule's distance (beads at index distance ≥ 2 no closer than ``d``).
-    bond_tol : largest allowed |bond/unit − 1|.
-    segments : also measure the smallest distance between segments sharing no bead.
-    unit : the bond length expected (1); None: the mean bond, i.e. the bonds must be equal (a
+    coords : ndarray
+        (N, 3) float64 array.
+    closed : bool
+        Whether bead N−1 is bonded to bead 0.
+    d : float
+        The bead rule's distance (beads at index distance ≥ 2 no closer than ``d``).
+    bond_tol : float
+        Largest allowed ``|bond/unit − 1|``.
+    segments : bool
+        Also measure the smallest distance between segments sharing no bead.
+    unit : float or None
+        The bond length expected (1); None: the mean bond, i.e. the bonds must be equal (a
         chain in other units, with ``d`` in the same units).
 
     Returns
     -------
-    dict with ``n_beads``, ``closed``, ``bond_min``, ``bond_max``, ``max_bond_error``,
-    ``worst_bond`` (index of the bond farthest from 1), ``min_bead_distance`` (index distance
-    ≥ 2), ``min_segment_distance`` (None unless ``segments``), ``d``, ``bond_tol``,
-    ``unit_bonds``, ``bead_rule`` and ``problems`` (one sentence per failed check; empty when
-    the chain is a unit-bond chain obeying the bead rule).
+    dict
+        With ``n_beads``, ``closed``, ``bond_min``, ``bond_max``, ``max_bond_error``,
+        ``worst_bond`` (index of the bond farthest from 1), ``min_bead_distance`` (index
+        distance ≥ 2), ``min_segment_distance`` (None unless ``segments``), ``d``,
+        ``bond_tol``, ``unit_bonds``, ``bead_rule`` and ``problems`` (one sentence per failed
+        check; empty when the chain is a unit-bond chain obeying the bead rule).
     """
     x = np.ascontiguousarray(coords, dtype=np.float64)
     b = np.roll(x, -1, axis=0) - x if closed else np.diff(x, axis=0)

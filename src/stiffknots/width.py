@@ -55,6 +55,8 @@ class Width:
     closed : bool
         A knot (True) or an open chain.
 
+    Notes
+    -----
     Build it with :meth:`tube`, :meth:`bead` or :meth:`from_dict`; the constructor checks that
     the four numbers agree.
     """

@@ -143,10 +143,10 @@ class ContactMap:
         Contact distance (bond units).
     min_sep : int
         Minimum index separation of a contact.
-    i, j : ndarray of int, shape (K,)
-        The contact pairs, ``i < j``, sorted by ``(i, j)``.
-    dist : ndarray of float, shape (K,)
-        Their distances.
+    i, j : ndarray of int
+        The contact pairs, ``i < j``, sorted by ``(i, j)``; shape ``(K,)``.
+    dist : ndarray of float
+        Their distances; shape ``(K,)``.
     """
 
     n: int

@@ -67,12 +67,17 @@ class PowerFit:
 
     Attributes
     ----------
-    p : exponent.
-    epsilon, error : the intercept ``eps*`` and its standard error (with the points' ``sigma``
+    p : float
+        Exponent.
+    epsilon, error : float
+        The intercept ``eps*`` and its standard error (with the points' ``sigma``
         as given, not scaled).
-    a, a_error : the amplitude and its standard error.
-    chi2 : ``sum ((eps_k - model_k) / sigma_k)^2``.
-    dof : points minus 2.
+    a, a_error : float
+        The amplitude and its standard error.
+    chi2 : float
+        ``sum ((eps_k - model_k) / sigma_k)^2``.
+    dof : int
+        Points minus 2.
     """
 
     p: float
@@ -94,16 +99,25 @@ class ThinLimitFit:
 
     Attributes
     ----------
-    epsilon, error : ``eps*`` and its standard error (statistical and exponent parts in
+    epsilon, error : float
+        ``eps*`` and its standard error (statistical and exponent parts in
         quadrature; see the module docstring).
-    p, p_range : the exponent used and its ``1 sigma`` profile interval (``None`` when held).
-    p_free : whether ``p`` was fitted (at least four points) or held at :data:`DEFAULT_P`.
-    a : the amplitude at ``p``.
-    stat_error, exponent_error, range_error : the parts of ``error``.
-    range_fits : ``(points, eps*)`` of the sub-series without the widest points.
-    scale : the factor applied to the points' ``sigma`` (``>= 1``).
-    chi2, dof : of the best fit, with the ``sigma`` as given.
-    alternatives : fits at the fixed exponents :data:`ALTERNATIVE_P`.
+    p, p_range
+        The exponent used and its ``1 sigma`` profile interval (``None`` when held).
+    p_free : bool
+        Whether ``p`` was fitted (at least four points) or held at :data:`DEFAULT_P`.
+    a : float
+        The amplitude at ``p``.
+    stat_error, exponent_error, range_error : float
+        The parts of ``error``.
+    range_fits : list of tuple
+        ``(points, eps*)`` of the sub-series without the widest points.
+    scale : float
+        The factor applied to the points' ``sigma`` (``>= 1``).
+    chi2, dof
+        Of the best fit, with the ``sigma`` as given.
+    alternatives : list of PowerFit
+        Fits at the fixed exponents :data:`ALTERNATIVE_P`.
     """
 
     epsilon: float
@@ -173,10 +187,14 @@ def fit_power(w: Sequence[float], eps: Sequence[float], sigma=None, p: float = D
 
     Parameters
     ----------
-    w : widths (``w/L``), all ``> 0``.
-    eps : ``eps*_w`` at those widths.
-    sigma : standard errors of ``eps`` (default 1 each).
-    p : exponent ``> 0``.
+    w : sequence of float
+        Widths (``w/L``), all ``> 0``.
+    eps : sequence of float
+        ``eps*_w`` at those widths.
+    sigma
+        Standard errors of ``eps`` (default 1 each).
+    p : float
+        Exponent ``> 0``.
 
     Returns
     -------
@@ -203,12 +221,17 @@ def extrapolate(w: Sequence[float], eps: Sequence[float], sigma=None, *,
 
     Parameters
     ----------
-    w : widths (``w/L``, any positive unit), at least two different ones.
-    eps : ``eps*_w`` at those widths.
-    sigma : standard errors of ``eps`` (default: equal, then set by the residuals).
-    p : hold the exponent at this value; default: profiled over ``p_grid`` when there are at
+    w : sequence of float
+        Widths (``w/L``, any positive unit), at least two different ones.
+    eps : sequence of float
+        ``eps*_w`` at those widths.
+    sigma
+        Standard errors of ``eps`` (default: equal, then set by the residuals).
+    p : float or None
+        Hold the exponent at this value; default: profiled over ``p_grid`` when there are at
         least four points, else held at :data:`DEFAULT_P`.
-    p_grid : the exponents scanned (default 271 values in ``[P_MIN, P_MAX]``).
+    p_grid : sequence of float or None
+        The exponents scanned (default 271 values in ``[P_MIN, P_MAX]``).
 
     Returns
     -------

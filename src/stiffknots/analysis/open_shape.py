@@ -33,8 +33,8 @@ def open_shape(coords: np.ndarray, axis_distance: float = 2.0) -> dict:
     * planarity: RMS distance of loop beads from the plane < 0.1 R;
     * roundness: RMS deviation from the circle < 0.05 R;
     * closure: the loop beads cover ≥ 90 % of the circle's angles (in 10° bins);
-    * tangency: the z axis lies in the loop's plane (|n·ẑ| < 0.25) and passes at distance
-      D from the centre with |D/R − 1| < 0.5. In the thin limit D/R → 1 (the circle touches
+    * tangency: the z axis lies in the loop's plane (``|n·ẑ| < 0.25``) and passes at distance
+      D from the centre with ``|D/R − 1| < 0.5``. In the thin limit D/R → 1 (the circle touches
       the line, paper §VIII); a finite thickness makes the string wrap part of the circle,
       which pulls the circle's centre towards the axis; D/R is reported so the trend shows.
 

@@ -432,7 +432,7 @@ def classify(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
         Must be True for a class to be found; an open chain is ``"other"``.
     d : float, default ``1/√2``
         Exclusion distance of the chain (sets the contact distance ``factor × d``).
-    factor, cutoff, min_sep :
+    factor, cutoff, min_sep
         Contact rule, see :func:`~stiffknots.analysis.contacts.contact_map`.
     thresholds : Thresholds, optional
         Override the criteria (defaults in the module docstring).

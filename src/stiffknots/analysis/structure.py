@@ -308,8 +308,8 @@ class LineBraid:
     ----------
     multiplicity : int
         ``m``, the number of strands running together.
-    stretches : list of (start, length)
-        The stretches (bead runs, possibly wrapping for a closed chain).
+    stretches : list of tuple of int
+        The stretches, ``(start, length)`` (bead runs, possibly wrapping for a closed chain).
     length : float
         Mean arc length of the stretches (bond units).
     closed : bool
@@ -334,22 +334,22 @@ class ContactZone:
     ----------
     kind : str
         ``"line-braid"``, ``"point-braid"`` or ``"multiple-point"``.
-    runs : list of (start, length)
-        The runs of beads in contact (one per strand passage).
+    runs : list of tuple of int
+        The runs of beads in contact, ``(start, length)`` (one per strand passage).
     multiplicity : int
         Largest local multiplicity ``m(s)`` in the zone (strands meeting there).
     length : float
         Arc length of the longest run (bond units).
     alignment : float
         Median ``|t_i·t_j|`` over the zone's contacts (1: tangent strands, 0: perpendicular).
-    centre : ndarray, shape (3,)
-        Mean position of its beads.
+    centre : ndarray
+        Mean position of its beads, shape ``(3,)``.
     closed : bool
         The zone is the whole closed chain.
-    stretches : dict of int to float
-        For each local multiplicity ``m >= 2`` in the zone, the arc length of its longest
-        stretch of constant ``m(s) = m`` along one strand (bond units): a two-strand braid
-        that a third strand touches at one bead holds ``{2: 29.0, 3: 0.0}``.
+    stretches : dict
+        ``int`` to ``float``: for each local multiplicity ``m >= 2`` in the zone, the arc length of
+        its longest stretch of constant ``m(s) = m`` along one strand (bond units): a two-strand
+        braid that a third strand touches at one bead holds ``{2: 29.0, 3: 0.0}``.
     """
 
     kind: str
@@ -454,8 +454,8 @@ class Structure:
     Attributes
     ----------
     contact_map : ContactMap
-    multiplicity : ndarray of int, shape (N,)
-        Local multiplicity ``m(s)``.
+    multiplicity : ndarray of int
+        Local multiplicity ``m(s)``, shape ``(N,)``.
     line_braids : list of LineBraid
     zones : list of ContactZone
     graph : StructureGraph
@@ -759,8 +759,9 @@ def analyse_structure(coords: Any, closed: bool = True, *, d: float = DEFAULT_D,
 
     Parameters
     ----------
-    coords, closed : the chain (bead positions, shape (N, 3)) and whether it is closed.
-    d, factor, cutoff, min_sep :
+    coords, closed
+        The chain (bead positions, shape (N, 3)) and whether it is closed.
+    d, factor, cutoff, min_sep
         Contact rule, see :func:`~stiffknots.analysis.contacts.contact_map`.
     min_length : float, optional
         Shortest line-braid (arc length, bond units); default ``max(3 × cutoff, 0.1 L)``.

@@ -58,7 +58,7 @@ _NOTES = {"langevin": "annealing by Langevin dynamics (--schedule langevin)",
 
 
 def schedule_note(plan) -> str:
-    """A sentence saying which search runs and why (:attr:`AnnealPlan.chosen_by`)."""
+    """A sentence saying which search runs and why (:attr:`.AnnealPlan.chosen_by`)."""
     if plan.chosen_by == "auto":
         return ("annealing by Langevin dynamics (--schedule auto: the bead rule's default; "
                 "the paper's Monte Carlo annealing, §VII: --schedule geometric)")

@@ -107,6 +107,7 @@ def dump(obj) -> None:
 
 
 def fmt(x, nd=4):
+    """``x`` as text: a float with ``nd`` decimals, None as ``unknown``."""
     if x is None:
         return "unknown"
     if isinstance(x, float):
@@ -151,6 +152,7 @@ def tube_only(w: float | None, exclusion: str) -> None:
 
 
 def choice(option: str, value: str, allowed) -> str:
+    """``value`` if it is one of ``allowed``, else a :class:`UserError` naming ``option``."""
     if value not in allowed:
         raise UserError(f"{option} must be one of {', '.join(allowed)}, got {value!r}")
     return value

@@ -8,7 +8,7 @@ one loop, with the same checkpoints (:mod:`stiffknots.engine.checkpoints`), trac
 verification; replica exchange (:mod:`stiffknots.engine.tempering`) builds on the same pieces.
 
 With basin hops a stage's candidate is its quenched chain taken to its local minimum by the
-final minimiser (:func:`_candidate`). No step passes a strand through another: the moves are
+final minimiser (``_candidate()``). No step passes a strand through another: the moves are
 guarded (:mod:`.kernel`), the minimiser is guarded (:mod:`.polish`), and a hop's restart puts
 back a chain this same run reached before by those steps — a jump between two chains of one
 passage-free trajectory, so of one knot type (and the type of every result is verified again
@@ -18,7 +18,7 @@ Energy bookkeeping
 ------------------
 After every chunk the incremental energy is compared with the energy recomputed from scratch
 and then replaced by it. The comparison allows 1e-9 of the largest energy the chunk saw
-(|E| at its start or end, at least 1): the rounding error of a sum of increments is relative
+(``|E|`` at its start or end, at least 1): the rounding error of a sum of increments is relative
 to the magnitudes summed, and in the power energy of the ``tight`` plan a chunk can start at
 E ~ 10¹¹ and end at E ~ 30, so a tolerance relative to the final energy alone fails on
 correct runs, while a real bookkeeping error — a joint missed by a move — is of the order of
@@ -169,7 +169,7 @@ def _bonds(pos: np.ndarray, closed: bool) -> np.ndarray:
 def check_bookkeeping(state: ChainState, peak: float = 0.0) -> float:
     """The recomputed energy; EnergyBookkeepingError if the incremental one (or, at fixed
     force, E_d − F·Δz) differs by more than 1e-9 (the ``power`` energy: 1e-7,
-    :data:`BOOKKEEPING_RTOL_POWER`) of max(1, |E|, ``peak``) — ``peak`` the largest |E| the
+    :data:`BOOKKEEPING_RTOL_POWER`) of ``max(1, |E|, peak)`` — ``peak`` the largest ``|E|`` the
     incremental sum went through (module docstring)."""
     e_rec = state.recomputed_energy()
     ref = max(1.0, abs(e_rec), abs(state.energy), peak)
@@ -301,18 +301,26 @@ def run_replica(coords: np.ndarray, settings: AnnealSettings, seed: int, replica
 
     Parameters
     ----------
-    coords : (N, 3) starting chain (unit bonds, exclusion respected; open chains clamped).
-    settings : the run's settings (ensemble, plan, schedule, moves); a tempering schedule is
+    coords : ndarray
+        (N, 3) starting chain (unit bonds, exclusion respected; open chains clamped).
+    settings : AnnealSettings
+        The run's settings (ensemble, plan, schedule, moves); a tempering schedule is
         run by :func:`stiffknots.engine.tempering.run_tempering` instead.
-    seed : seed of the kernels' generator.
-    replica : index recorded in the result.
-    checkpoint : path of a ``.npz`` checkpoint file, written every ``checkpoint_every`` chunks
+    seed : int
+        Seed of the kernels' generator.
+    replica : int
+        Index recorded in the result.
+    checkpoint : str or Path or None
+        Path of a ``.npz`` checkpoint file, written every ``checkpoint_every`` chunks
         and/or every ``checkpoint_seconds`` seconds (default every 10 chunks) and at the end.
-    resume : continue from ``checkpoint`` if the file exists (it must come from the same
+    resume : bool
+        Continue from ``checkpoint`` if the file exists (it must come from the same
         settings, seed, replica, starting chain and version); otherwise start afresh.
-    stop_after : stop after this many chunks in this call, write the checkpoint and raise
+    stop_after : int or None
+        Stop after this many chunks in this call, write the checkpoint and raise
         :class:`RunStopped` (for time-limited batch jobs, and for tests).
-    progress : called after every chunk with ``{"replica", "done", "total", "epsilon",
+    progress : callable or None
+        Called after every chunk with ``{"replica", "done", "total", "epsilon",
         "best"}`` (moves done and planned, the current and the lowest ε so far).
 
     Returns
@@ -472,4 +480,5 @@ def replica_seeds(seed: int, replicas: int, first: int = 0) -> list[int]:
 
 
 def default_workers(replicas: int) -> int:
+    """Worker processes for ``replicas`` replicas: one each, at most the CPU count."""
     return max(1, min(replicas, os.cpu_count() or 1))

@@ -53,13 +53,13 @@ pivot; the rigid part keeps its angles. Δz changes by sg·Δ, Δ := z'_{k0} −
 Detailed balance (pivot move)
 -----------------------------
 The stationary measure of the crankshafts (open chain, ends fixed) is the bond-constrained
-measure Π_{free b} d³r_b Π_{bonds} δ(|r_{b+1} − r_b| − 1) times e^{−E/T}. The fixed-force
+measure ``Π_{free b} d³r_b Π_{bonds} δ(|r_{b+1} − r_b| − 1)`` times e^{−E/T}. The fixed-force
 ensemble adds the end heights as variables with Lebesgue measure, dz_{first} dz_{last} (the
 Laplace transform of the fixed-extension ensemble, Z(F) = ∫dΔz e^{FΔz/T} Z(Δz)). In the
 coordinates of a move — the rotated beads, with the pivot fixed — the rotation is an isometry
 of their positions that preserves every bond delta, so it preserves their measure; the last
-variable, z_{k1}, is fixed by the bond delta δ(|r_{k1} − r_{k2}| − 1), whose integral over
-z_{k1} leaves the Jacobian 1/|∂|r_{k1} − r_{k2}|/∂z_{k1}| = 1/h. The target density of the
+variable, z_{k1}, is fixed by the bond delta ``δ(|r_{k1} − r_{k2}| − 1)``, whose integral over
+z_{k1} leaves the Jacobian ``1/|∂|r_{k1} − r_{k2}|/∂z_{k1}| = 1/h``. The target density of the
 move's coordinates is therefore ∝ e^{−E/T}/h. The proposal is symmetric: the move (end, m, n,
 φ) from X to X' is undone by (end, m, n, −φ) from X' — same pivot (it does not move), same
 ρ_max, hence the same angle range and the same density, and the re-attachment maps the
@@ -76,20 +76,20 @@ ensemble (checked against an exact average on a 7-bead chain in tests/test_open_
 Strand passage is impossible by construction (pivot move)
 ---------------------------------------------------------
 The knot type is that of the closed curve K = (bottom ray) ∪ segments ∪ (top ray), the rays
-continuing the end segments along ∓z to infinity (as for :func:`run_moves`). Take the path
+continuing the end segments along ∓z to infinity (as for :func:`~.kernel.run_moves`). Take the path
 t ∈ [0, 1]: the rotated beads turn by t·φ, the end beads slide linearly, z_{k0}(t) =
 z_{k0} + tΔ (bead k = 1 follows one bond behind), and every segment is the linear
 interpolation of its two end beads; the moving ray slides with its end bead. Speeds: a rotated
-bead moves at |φ|·ρ ≤ L_rot := |φ|·ρ_max, the end beads and the moving ray at |Δ|, and a point
-of a segment at most as fast as the faster of its two end beads, so every moved segment moves
-at speed ≤ L := max(L_rot, |Δ|). The distance between two pieces is then Lipschitz in t with
+bead moves at ``|φ|·ρ ≤ L_rot := |φ|·ρ_max``, the end beads and the moving ray at ``|Δ|``, and a
+point of a segment at most as fast as the faster of its two end beads, so every moved segment moves
+at speed ``≤ L := max(L_rot, |Δ|)``. The distance between two pieces is then Lipschitz in t with
 the sum of their speeds, and it stays > 0 on [0, 1] if d(0) + d(1) exceeds that sum (same
 argument as in :mod:`stiffknots.engine.kernel`). The move is accepted only if:
 
 (A) slab: every free bead stays strictly between the two end beads along the path. For a
     rotated bead, with a = sg·(z − z_far) (the height above the fixed far end) and
     b = sg·(z_{k0} − z) (the depth below the moving end): a(0) + a(1) > L_rot and
-    b(0) + b(1) > L_rot + |Δ|. For a fixed bead b(t) is linear, so b(1) > 0 suffices — checked
+    ``b(0) + b(1) > L_rot + |Δ|``. For a fixed bead b(t) is linear, so b(1) > 0 suffices — checked
     (O(N)) only when the end moves inward; for bead k = 1, a(t) is linear: a(1) > 0.
     Then every segment but the two end segments has both end beads strictly inside the slab,
     hence lies strictly inside it, and cannot meet a ray; an end segment lies beyond every
@@ -119,7 +119,7 @@ The cell list of :func:`~stiffknots.engine.kernel.cell_build` (segment midpoints
 around the new midpoint of each moved segment with reach 1 + max(L, w, d): it finds every fixed
 segment within max(L, w) of the moved one and every fixed bead within d of the moved segment's
 first bead. After an accepted move the moved segments are re-hashed, and the kernel's
-slab bounds ``fpar[F_ZLO]``/``fpar[F_ZHI]`` (read by :func:`run_moves`) follow the ends.
+slab bounds ``fpar[F_ZLO]``/``fpar[F_ZHI]`` (read by :func:`~.kernel.run_moves`) follow the ends.
 
 All functions here see arrays and numbers only and allocate nothing in the loop.
 """
@@ -318,22 +318,33 @@ def run_end_moves(pos, n_moves, temperature, force, m_max, ipar, fpar, head, nxt
 
     Parameters
     ----------
-    pos : (N, 3) float64 open chain, clamped as :func:`check_open_clamping` requires; modified
+    pos
+        (N, 3) float64 open chain, clamped as :func:`.check_open_clamping` requires; modified
         in place.
-    n_moves : number of attempted moves.
-    temperature : k_B T in units of C (0: quench, only ΔE ≤ 0 is accepted).
-    force : F in C/b² (E = E_d − F·Δz).
-    m_max : largest number of rotated beads (capped at N − 4 and at ``len(newpos) − 2``).
-    ipar, fpar : the crankshaft kernel's parameter arrays (exclusion, energy mode, curvature
+    n_moves
+        Number of attempted moves.
+    temperature
+        k_B T in units of C (0: quench, only ΔE ≤ 0 is accepted).
+    force
+        F in C/b² (E = E_d − F·Δz).
+    m_max
+        Largest number of rotated beads (capped at N − 4 and at ``len(newpos) − 2``).
+    ipar, fpar
+        The crankshaft kernel's parameter arrays (exclusion, energy mode, curvature
         limit, angle scales, cell side); ``fpar[F_ZLO]``/``fpar[F_ZHI]`` are updated.
-    head, nxt, prv, bucket : the cell list of segment midpoints (open chain), kept current.
-    newpos : (≥ m_max + 2, 3) float64 scratch space.
-    cnt : (C_NCNT,) int64 counters, class 0 = top end, 1 = bottom end.
-    rng : (4,) uint64 xoshiro256+ state, advanced in place.
+    head, nxt, prv, bucket
+        The cell list of segment midpoints (open chain), kept current.
+    newpos
+        (≥ m_max + 2, 3) float64 scratch space.
+    cnt
+        (C_NCNT,) int64 counters, class 0 = top end, 1 = bottom end.
+    rng
+        (4,) uint64 xoshiro256+ state, advanced in place.
 
     Returns
     -------
-    float : the total change of E_d − F·Δz over the accepted moves.
+    float
+        The total change of E_d − F·Δz over the accepted moves.
     """
     n = pos.shape[0]
     # the pivot needs rows k = 0 … m + 1 of newpos

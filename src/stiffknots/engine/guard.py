@@ -10,8 +10,8 @@ No strand passage (proof)
 -------------------------
 For segments a = (a, a+1) and b = (b, b+1) and points at parameters s and u on them,
 p_a − p_b moves with velocity (1−s)Δr_a + sΔr_{a+1} − (1−u)Δr_b − uΔr_{b+1}, a convex
-combination of the four differences Δr_i − Δr_j (i ∈ a, j ∈ b); so every |p_a − p_b| is
-L-Lipschitz in t with L = max |Δr_i − Δr_j| ≤ δ_a + δ_b (δ = the larger displacement of a
+combination of the four differences Δr_i − Δr_j (i ∈ a, j ∈ b); so every ``|p_a − p_b|`` is
+L-Lipschitz in t with ``L = max |Δr_i − Δr_j| ≤ δ_a + δ_b`` (δ = the larger displacement of a
 segment's two beads: a point of a segment moves at most as fast as the faster of its ends),
 and so is their minimum, the segment distance D(t). On any interval [t₀, t₁],
 D(t) ≥ (D(t₀) + D(t₁) − L(t₁ − t₀))/2. A motion is accepted only if, for every pair of
@@ -49,7 +49,8 @@ from numba import njit
 
 from stiffknots.geometry import seg_dist2
 
-GUARD_FLOOR = 1e-9  # the guard certifies that strands stay this far apart (≫ rounding)
+#: the guard certifies that strands stay this far apart (≫ rounding)
+GUARD_FLOOR = 1e-9
 
 
 @njit(cache=True)

@@ -28,7 +28,7 @@ Strand passage is impossible by construction
 The rotation is continuous in the angle, t ↦ t·φ for t ∈ [0, 1]. Every point of a moved
 segment lies at distance ρ ≤ ρ_max from the axis (distance to a line is convex, so the maximum
 over a segment is reached at an end point), so along the path it moves with speed
-|φ|·ρ ≤ L := |φ|·ρ_max. The distance d(t) between a moved segment and a fixed segment is
+``|φ|·ρ ≤ L := |φ|·ρ_max``. The distance d(t) between a moved segment and a fixed segment is
 therefore L-Lipschitz in t, and d(t) ≥ max(d(0) − L t, d(1) − L (1 − t)) ≥ (d(0) + d(1) − L)/2.
 A move is accepted only if d(0) + d(1) > L for every pair (moved segment, fixed segment) that
 share no bead, so d(t) > 0 along the whole path: no segment of the chain crosses a segment it
@@ -58,23 +58,23 @@ A single-bead move (bead i from o to p, pivots j = i − 1 and k = i + 1) tests 
 v ∉ {j, i} only through three tests, and each can refuse the move only if v's midpoint lies in
 a ball: the bead rule (bead v, or an open chain's last bead, within d of p) in the ball of
 radius d + 1/2 about p; segment A = (j, i) in the ball of radius 1 + D about A's new midpoint
-(the midpoint bound of :func:`~stiffknots.engine.prims._segment_blocked`, D = max(w, L));
+(the midpoint bound of ``_segment_blocked()``, D = max(w, L));
 segment B = (i, k) likewise about B's. The cells scanned are those that overlap the bounding
 box of the three balls (radii enlarged by 1e-9 against rounding), a subset of the cube of
 side 2(1.5 + D) about p that the general loop scans. Every segment a test could refuse is
 therefore met, and the tests themselves are the general loop's, so the decision is the same.
 
 Neighbour lists (the paper's move alone)
----------------------------------------
+----------------------------------------
 When every move is the paper's single-bead move (:func:`run_single_moves`), bead i keeps a
 list of the segments v ∉ {i − 1, i} whose midpoint lay within R_list = R + δ + s of bead i
 when the lists were built (positions ``ref``); R = max(1.5 + max(w, δ), d + 1/2) + 1e-9
-contains the three balls above for any single-bead move (|p − midpoint of A or B| = 1/2 and
-L = δ·ρ ≤ δ, as ρ ≤ |i − j| = 1), and s = ``NBR_SKIN``. The lists are valid while every bead
+contains the three balls above for any single-bead move (``|p − midpoint of A or B| = 1/2`` and
+L = δ·ρ ≤ δ, as ``ρ ≤ |i − j| = 1``), and s = ``NBR_SKIN``. The lists are valid while every bead
 lies within s/2 of its place at the build: then for a move of bead i to p and a segment v
 whose midpoint m_v is within R of p now,
-|m_v(build) − ref_i| ≤ |m_v(build) − m_v| + |m_v − p| + |p − x_i| + |x_i − ref_i|
-≤ s/2 + R + δ + s/2 = R_list (a midpoint moves no farther than the farther of its beads),
+``|m_v(build) − ref_i| ≤ |m_v(build) − m_v| + |m_v − p| + |p − x_i| + |x_i − ref_i|
+≤ s/2 + R + δ + s/2 = R_list`` (a midpoint moves no farther than the farther of its beads),
 so v is in bead i's list and the list meets every segment the cell scan would refuse on.
 The kernel rebuilds all lists as soon as an accepted move takes its bead farther than s/2
 from ``ref``, and on entry when any bead (moved by any kernel, or replaced) is farther than
@@ -114,7 +114,7 @@ crankshaft move. All functions see arrays and numbers only (no Python objects) a
 nothing in the loop. Inside the loop only helpers that take numbers are inlined: numba takes a
 reference (two atomic operations) on every array passed to an inlined helper, which costs
 more than a whole single-bead move; array work there is written out, or is a call that is
-rarely made (:func:`_cell_relink`, :func:`_nbr_build`).
+rarely made (``_cell_relink()``, ``_nbr_build()``).
 """
 
 from __future__ import annotations
@@ -182,8 +182,9 @@ from stiffknots.engine.prims import (  # noqa: F401 (re-exported: the kernel's p
 # numbers: an inlined helper that takes an array makes numba take a reference to the array
 # (an atomic increment and decrement) on every call, which costs more than the whole move.
 
-#: neighbour lists (:func:`run_single_moves`): skin, and segments reserved per bead
+#: neighbour lists (:func:`run_single_moves`): skin
 NBR_SKIN = 0.3
+#: neighbour lists: segments reserved per bead
 NBR_PER_BEAD = 16
 # slots of the neighbour lists' bookkeeping array ``nbr_meta``
 NB_RADIUS = 0  # list radius of the last build (0: never built)
@@ -354,13 +355,17 @@ def run_single_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, buck
 
     Parameters
     ----------
-    pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, cnt, rng : as
-        :func:`run_moves` (``ipar[I_MMAX]`` and ``fpar[F_PSINGLE]`` are not read).
-    nbr : (≥ 1,) int32, the lists one after another (:data:`NBR_PER_BEAD` per bead is a good
+    pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, cnt, rng
+        As :func:`run_moves` (``ipar[I_MMAX]`` and ``fpar[F_PSINGLE]`` are not read).
+    nbr
+        (≥ 1,) int32, the lists one after another (:data:`NBR_PER_BEAD` per bead is a good
         size; a bead whose list does not fit falls back to the cell list).
-    row : (2 N,) int64, start and length of bead i's list at 2i and 2i + 1.
-    ref : (N, 3) float64, the positions at the last build.
-    nbr_meta : (NB_NMETA,) float64: radius of the last build (0: never) and build count.
+    row
+        (2 N,) int64, start and length of bead i's list at 2i and 2i + 1.
+    ref
+        (N, 3) float64, the positions at the last build.
+    nbr_meta
+        (NB_NMETA,) float64: radius of the last build (0: never) and build count.
         These four are (re)built here when needed, whatever happened to the chain since.
     """
     return _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, pos,
@@ -374,18 +379,27 @@ def run_moves(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, new
 
     Parameters
     ----------
-    pos : (N, 3) float64, modified in place. Closed chain with unit bonds.
-    n_moves : number of attempted moves.
-    temperature : k_B T in units of C (0 means a quench: only ΔE ≤ 0 is accepted).
-    ipar, fpar : integer and float parameters, see the ``I_*`` and ``F_*`` slots.
-    head, nxt, prv, bucket : the cell list of segment midpoints (``cell_build``).
-    newpos : (≥ m_max, 3) float64 scratch space.
-    cnt : (C_NCNT,) int64 counters, incremented.
-    rng : (4,) uint64 xoshiro256+ state (``new_rng_state``), advanced in place.
+    pos
+        (N, 3) float64, modified in place. Closed chain with unit bonds.
+    n_moves
+        Number of attempted moves.
+    temperature
+        k_B T in units of C (0 means a quench: only ΔE ≤ 0 is accepted).
+    ipar, fpar
+        Integer and float parameters, see the ``I_*`` and ``F_*`` slots.
+    head, nxt, prv, bucket
+        The cell list of segment midpoints (``cell_build``).
+    newpos
+        (≥ m_max, 3) float64 scratch space.
+    cnt
+        (C_NCNT,) int64 counters, incremented.
+    rng
+        (4,) uint64 xoshiro256+ state (``new_rng_state``), advanced in place.
 
     Returns
     -------
-    float : the total energy change of the accepted moves.
+    float
+        The total energy change of the accepted moves.
     """
     return _moves_loop(pos, n_moves, temperature, ipar, fpar, head, nxt, prv, bucket, newpos,
                        cnt, rng, nxt, nxt, newpos, fpar, False)

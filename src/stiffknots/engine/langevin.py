@@ -125,8 +125,8 @@ def unit_epsilon(pos: np.ndarray) -> float:
 def project_bonds(pos: np.ndarray, tol: float = 1e-14, max_iter: int = 20) -> np.ndarray:
     """The closed chain moved to unit bonds by min-norm Gauss–Newton corrections.
 
-    Each iteration solves min |Δx|² subject to the linearised bonds,
-    2 b_n·(Δr_{n+1} − Δr_n) = 1 − |b_n|², i.e. Δx = Aᵀ(AAᵀ)⁻¹r (A sparse, AAᵀ cyclic
+    Each iteration solves ``min |Δx|²`` subject to the linearised bonds,
+    ``2 b_n·(Δr_{n+1} − Δr_n) = 1 − |b_n|²``, i.e. Δx = Aᵀ(AAᵀ)⁻¹r (A sparse, AAᵀ cyclic
     tridiagonal); quadratic convergence from bonds within a few 10⁻³ of 1.
     """
     x = np.array(pos, dtype=float)
@@ -176,12 +176,17 @@ def run_langevin(coords: np.ndarray, settings: LangevinSettings | None = None, s
 
     Parameters
     ----------
-    coords : (N, 3) closed chain with unit bonds that obeys the bead rule with diameter ``d``.
-    settings : the dynamics (:class:`LangevinSettings`; default the peer's protocol).
-    seed : seed of the noise (xoshiro256+) and of the initial velocities (Maxwell at
+    coords : ndarray
+        (N, 3) closed chain with unit bonds that obeys the bead rule with diameter ``d``.
+    settings : LangevinSettings or None
+        The dynamics (:class:`LangevinSettings`; default the peer's protocol).
+    seed : int
+        Seed of the noise (xoshiro256+) and of the initial velocities (Maxwell at
         ``t_start``).
-    d : the bead rule's diameter (§VII: 1/√2); the result obeys it.
-    progress : called after every chunk with ``{"done", "total", "epsilon", "temperature"}``
+    d : float
+        The bead rule's diameter (§VII: 1/√2); the result obeys it.
+    progress : callable or None
+        Called after every chunk with ``{"done", "total", "epsilon", "temperature"}``
         (steps done and planned).
 
     Returns

@@ -6,7 +6,7 @@ searches; it is a *search* stage, not a sampler of the constrained model: the bo
 springs and the bead rule a soft wall, and the chain it ends on is taken back onto the exact
 model (unit bonds, the bead rule) by :mod:`stiffknots.engine.langevin` and the final minimiser.
 
-Model (units: bond length 1, C = 1, k_B = 1, bead mass 1; the peer's, bench/peer_lammps.py)
+Model (units: bond length 1, C = 1, k_B = 1, bead mass 1; the peer's, bench/peer_lammps.py) ::
 
     U = K_b Σ_bonds (|b_n| − 1)²  +  Σ_joints (1 − û_n·û_{n+1})  +  Σ_{|i−j| ≥ 2} φ(r_ij),
 
@@ -25,11 +25,11 @@ No strand passage (proof)
 -------------------------
 A step moves every bead along the straight line from r_i to r'_i (the drift of the step;
 kicks change only velocities). A point p = (1−s)r_a + s r_{a+1} of a segment then moves by at
-most max(|Δr_a|, |Δr_{a+1}|) in that step, along a straight line; over several steps it
+most ``max(|Δr_a|, |Δr_{a+1}|)`` in that step, along a straight line; over several steps it
 travels at most max(c_a, c_{a+1}), c_i the summed step lengths of bead i. So the distance D_ab
 between two segments a = (a, a+1) and b = (b, b+1) that share no bead, measured at some moment,
 has since fallen by at most e_a + e_b, e = the larger c of a segment's beads since then; and
-within one step it is L-Lipschitz in the step's parameter with L = max|Δr| over a's beads plus
+within one step it is L-Lipschitz in the step's parameter with ``L = max|Δr|`` over a's beads plus
 the same over b's, so D(t) ≥ (D(0) + D(1) − L)/2 on the step. The guard keeps, for every such
 pair, one of these certificates > η (η = 10⁻⁹, the floor of the straight-line guard
 :data:`stiffknots.engine.guard.GUARD_FLOOR`):
@@ -153,7 +153,7 @@ def forces(pos, k_bond, sigma, rc2, pi, pj, npairs, f, gb, ub, il):
     """Forces ``f`` = −∇U at ``pos`` (closed ring) over the listed pairs; returns U.
 
     Scratch (N, 3) ``gb`` (∂U/∂b_n, b_n = r_{n+1} − r_n), ``ub`` (unit bonds û_n) and (N,)
-    ``il`` (1/|b_n|): one square root and one division per bond.
+    ``il`` (``1/|b_n|``): one square root and one division per bond.
     """
     n = pos.shape[0]
     u = 0.0

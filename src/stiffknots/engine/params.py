@@ -36,31 +36,44 @@ class MoveParams:
 
     Attributes
     ----------
-    delta : angle of the paper's single-bead move (±delta), default π/100 (§VII).
-    p_single : probability that a move is the paper's single-bead move.
-    m_law : how a multi-bead move draws its length m in [2, m_max]: ``"uniform"``, ``"log"``
+    delta : float
+        Angle of the paper's single-bead move (±delta), default π/100 (§VII).
+    p_single : float
+        Probability that a move is the paper's single-bead move.
+    m_law : str
+        How a multi-bead move draws its length m in [2, m_max]: ``"uniform"``, ``"log"``
         (log-uniform: as many moves at every scale of m, the mean cost ∝ m_max/ln m_max) or
         ``"mixed"`` (half of each, the default: more moves per second than the uniform law,
         and its large moves, which the 4_1's 4-fold cage needs to reach its lowest ε;
         docs/methods/moves.md).
-    m_max : largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
+    m_max : int or None
+        Largest number of beads rotated by one multi-bead crankshaft move (≥ 1; 1 disables
         multi-bead moves and leaves exactly the paper's move). None (the default): N/2, set by
         :meth:`for_beads` — a whole loop of a doubly covered circle must be able to turn in
         its plane at any N (75 at the paper's N = 150).
-    phi_max : largest rotation angle of a multi-bead move (radians).
-    l_cap, l_min : a multi-bead move first draws a displacement scale ℓ log-uniformly in
+    phi_max : float
+        Largest rotation angle of a multi-bead move (radians).
+    l_cap, l_min : float
+        A multi-bead move first draws a displacement scale ℓ log-uniformly in
         [l_min, l_cap], then an angle uniform in ±min(phi_max, ℓ/ρ_max), ρ_max the largest
         distance of a moved bead from the axis; no point moves farther than l_cap.
-    exclusion : ``"bead"`` (no two beads at index distance ≥ 2 closer than ``d``; the paper's
+    exclusion : str
+        ``"bead"`` (no two beads at index distance ≥ 2 closer than ``d``; the paper's
         rule, d = 1/√2) or ``"tube"`` (no two segments sharing no bead closer than ``w``).
-    d : bead exclusion distance.
-    w : tube diameter (``tube`` model only).
-    energy : ``"bending"`` — the paper's E_d = Σ (1 − cos θ_n) (§VII) — or ``"power"`` —
+    d : float
+        Bead exclusion distance.
+    w : float
+        Tube diameter (``tube`` model only).
+    energy : str
+        ``"bending"`` — the paper's E_d = Σ (1 − cos θ_n) (§VII) — or ``"power"`` —
         Σ (1 − cos θ_n)^power, whose minimum approaches the smallest achievable largest
         turning angle as ``power`` grows (the restricted-curvature search, §IX D).
-    power : exponent of the ``"power"`` energy (integer ≥ 1).
-    energy_scale : the ``"power"`` energy is Σ ((1 − cos θ_n)/energy_scale)^power.
-    max_turn : largest turning angle θ_max allowed at any joint (radians), or None for no
+    power : int
+        Exponent of the ``"power"`` energy (integer ≥ 1).
+    energy_scale : float
+        The ``"power"`` energy is Σ ((1 − cos θ_n)/energy_scale)^power.
+    max_turn : float or None
+        Largest turning angle θ_max allowed at any joint (radians), or None for no
         limit; with unit bonds it is the curvature limit 1/R, R = 1/(2 sin(θ_max/2)).
     """
 
@@ -150,6 +163,8 @@ class MoveParams:
         return 2.0 * max(1.5 + max(wt, self.delta), self.d + 0.5)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kernels' integer and float parameter arrays (slots in
+        :mod:`stiffknots.engine.prims`)."""
         ip = np.zeros(K.I_NIPAR, dtype=np.int64)
         fp = np.zeros(K.F_NFPAR, dtype=np.float64)
         ip[K.I_MODE] = EXCLUSION_MODELS.index(self.exclusion)
@@ -176,17 +191,23 @@ class Ensemble:
 
     Attributes
     ----------
-    kind : ``"closed"`` — a closed chain (a knot); ``"extension"`` — an open chain whose two
+    kind : str
+        ``"closed"`` — a closed chain (a knot); ``"extension"`` — an open chain whose two
         end segments are clamped on the z axis, so that Δz and the excess length
         L_e = (N − 1) − Δz are fixed (the force term −F·Δz is then a constant); ``"force"`` —
         the same open chain whose ends slide along z under the pulling force ``force``: the
         energy is E_d − F·Δz and L_e is measured (end moves of
         :mod:`stiffknots.engine.force_kernel`).
-    force : F in C/b² (``force`` ensemble only).
-    end_fraction : fraction of the attempted moves that move an end (slides and pivots).
-    slide_fraction : fraction of the end moves that are slides (the others are pivots).
-    end_m_max : largest number of beads rotated by a pivot move (≥ 1).
-    slide_m_max : largest number of free beads translated by a slide move (None: all).
+    force : float
+        F in C/b² (``force`` ensemble only).
+    end_fraction : float
+        Fraction of the attempted moves that move an end (slides and pivots).
+    slide_fraction : float
+        Fraction of the end moves that are slides (the others are pivots).
+    end_m_max : int
+        Largest number of beads rotated by a pivot move (≥ 1).
+    slide_m_max : int or None
+        Largest number of free beads translated by a slide move (None: all).
     """
 
     kind: str = "closed"

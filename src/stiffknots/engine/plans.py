@@ -48,7 +48,7 @@ class Step:
     ``e_ref`` the energy per bead at the stage's setup (None: absolute). ``ratchet``: after
     the chunk, lower the curvature limit θ_max to the largest turning angle.
     ``restore_best`` (a basin hop's first chunk): start the chunk from the lowest candidate
-    chain found so far (:func:`stiffknots.engine.driver._candidate`) (the chain is replaced
+    chain found so far (``stiffknots.engine.driver._candidate()``) (the chain is replaced
     by it; the generator runs on).
     """
 

@@ -59,6 +59,7 @@ import numpy as np
 
 from stiffknots.errors import InvalidParameter
 
+#: the kinds of :class:`Schedule`, by name
 SCHEDULES = ("power", "geometric", "tempering", "langevin")
 
 
@@ -73,15 +74,21 @@ class Schedule:
 
     Attributes
     ----------
-    relax_fraction : fraction of the moves spent first relaxing the starting chain
+    relax_fraction : float
+        Fraction of the moves spent first relaxing the starting chain
         (geometric cooling ``t_relax`` → ``t_relax_end``, then a quench); 0 disables the stage
         and leaves the paper's plain annealing.
-    t_relax, t_relax_end : first and last temperature of the relaxation stage.
-    hops, hop_fraction, t_hop : the number of basin hops that end the run, the fraction of
+    t_relax, t_relax_end : float
+        First and last temperature of the relaxation stage.
+    hops, hop_fraction, t_hop
+        The number of basin hops that end the run, the fraction of
         the moves they take (shared equally) and the temperature each reheats to (then
         geometric cooling to ``t_end``); ``hops = 0`` disables them.
-    n_temps : number of temperatures of the tempering ladder (``tempering`` only).
+    n_temps : int
+        Number of temperatures of the tempering ladder (``tempering`` only).
 
+    Notes
+    -----
     Temperatures are k_B T in units of C per joint. A chain of N beads in equilibrium at T
     carries a thermal excess δε ≈ N²T (about N·T of energy E_d over its ~2N degrees of
     freedom, and ε = E_d·N), so the same schedule at another N means T ∝ 1/N²: the defaults are

@@ -27,16 +27,27 @@ class AnnealSettings:
 
     Attributes
     ----------
-    moves : attempted moves of the whole run.
-    schedule : the temperature schedule (:class:`Schedule`).
-    params : moves, exclusion and energy (:class:`MoveParams`).
-    quench_fraction : fraction of each stage's moves spent in its T = 0 quench (``anneal``).
-    n_chunks : chunks of the annealing (a chunk is the unit of traces and checkpoints).
-    target_epsilon : record the wall and CPU seconds at which ε first falls to this value.
-    ensemble : closed chain, open chain at fixed extension or at fixed force (:class:`Ensemble`).
-    plan : ``"anneal"`` or ``"tight"`` (see :mod:`stiffknots.engine.plans`).
-    powers : the powers p of the ``tight`` plan's continuation.
+    moves : int
+        Attempted moves of the whole run.
+    schedule : Schedule
+        The temperature schedule (:class:`Schedule`).
+    params : MoveParams
+        Moves, exclusion and energy (:class:`MoveParams`).
+    quench_fraction : float
+        Fraction of each stage's moves spent in its T = 0 quench (``anneal``).
+    n_chunks : int
+        Chunks of the annealing (a chunk is the unit of traces and checkpoints).
+    target_epsilon : float or None
+        Record the wall and CPU seconds at which ε first falls to this value.
+    ensemble : Ensemble
+        Closed chain, open chain at fixed extension or at fixed force (:class:`Ensemble`).
+    plan : str
+        ``"anneal"`` or ``"tight"`` (see :mod:`stiffknots.engine.plans`).
+    powers : tuple of int
+        The powers p of the ``tight`` plan's continuation.
 
+    Notes
+    -----
     The defaults (``moves``, :class:`Schedule`, :class:`MoveParams`) won the measurements
     of docs/methods/search.md: 15 M moves, of which the first 40 % relax the starting chain
     (t = 5e-5 → 1e-7) and the rest anneal geometrically from t = 0.1 to 1e-6 (§VII).

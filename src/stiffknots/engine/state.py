@@ -66,19 +66,26 @@ class ChainState:
 
     Parameters
     ----------
-    coords : (N, 3) chain with unit bonds that satisfies the exclusion model.
-    params : move, exclusion and energy parameters.
-    seed : seed of the kernels' generator (one generator for every move type).
-    ensemble : :class:`Ensemble` or its kind: ``"closed"`` (default), ``"extension"`` (an open
+    coords : ndarray
+        (N, 3) chain with unit bonds that satisfies the exclusion model.
+    params : MoveParams or None
+        Move, exclusion and energy parameters.
+    seed : int
+        Seed of the kernels' generator (one generator for every move type).
+    ensemble : Ensemble or str or None
+        :class:`Ensemble` or its kind: ``"closed"`` (default), ``"extension"`` (an open
         chain clamped on the z axis, see :func:`check_open_clamping`; the excess length
         L_e = (N−1) − Δz is fixed, paper §VIII) or ``"force"`` (the ends slide along z under
         ``ensemble.force``).
-    closed : shorthand of older code: ``closed=False`` means ``ensemble="extension"``.
+    closed : bool or None
+        Shorthand of older code: ``closed=False`` means ``ensemble="extension"``.
 
     Attributes
     ----------
-    energy : E_d (incremental, in the state's energy mode).
-    total_energy : E_d − F·Δz in the fixed-force ensemble (incremental); E_d otherwise.
+    energy
+        E_d (incremental, in the state's energy mode).
+    total_energy
+        E_d − F·Δz in the fixed-force ensemble (incremental); E_d otherwise.
     """
 
     def __init__(self, coords: np.ndarray, params: MoveParams | None = None, seed: int = 0,

@@ -1,7 +1,7 @@
 """Parallel tempering (replica exchange) for the closed bead chain of paper §VII.
 
 K copies of the chain (:class:`~stiffknots.engine.state.ChainState`) sit at the fixed
-temperatures of a ladder T_0 < T_1 < … < T_{K−1} (:meth:`Schedule.ladder`, geometric from
+temperatures of a ladder T_0 < T_1 < … < T_{K−1} (:meth:`.Schedule.ladder`, geometric from
 ``t_end`` to ``t_start``). A *round* runs every copy for the same number of moves at its own
 temperature, then attempts to exchange the configurations of neighbouring temperatures: the
 pairs (0, 1), (2, 3), … on even rounds and (1, 2), (3, 4), … on odd rounds (the deterministic

@@ -121,11 +121,12 @@ class Knot:
         sign being the crossing sign as in KnotInfo. When KnotInfo gives several words, the one
         on :attr:`braid_index` strings (else the one on fewest strings) is kept. The closure of
         the word is the knot; its number of strings is :attr:`braid_strands`.
-    pd_code : tuple of 4-tuples of int or None
-        Planar-diagram code of a minimal diagram (KnotInfo has none for 13 crossings).
-    torus : tuple (p, q) or None
-        For a torus knot :math:`T(p, q)`, with :math:`2 \\le p < q`; ``None`` otherwise. Torus
-        knots belong to the :math:`n = i` family (§VI C), with :math:`n = i = p`.
+    pd_code : tuple of tuple of int or None
+        Planar-diagram code (4-tuples of int) of a minimal diagram (KnotInfo has none for 13
+        crossings).
+    torus : tuple of int or None
+        ``(p, q)`` for a torus knot :math:`T(p, q)`, with :math:`2 \\le p < q`; ``None`` otherwise.
+        Torus knots belong to the :math:`n = i` family (§VI C), with :math:`n = i = p`.
     alternating : bool or None
         Whether the knot is alternating.
     dt_name : str or None
@@ -133,13 +134,14 @@ class Knot:
         the unknot.
     alexander_polynomial, jones_polynomial : str or None
         The polynomials as KnotInfo writes them (in the variable ``t``).
-    bridge_number_range : tuple (lo, hi) or None
-        Bounds on the bridge number: ``(n, n)`` when known, the KnotInfo interval otherwise.
-    braid_index_range : tuple (lo, hi) or None
-        Bounds on the braid index: ``(i, i)`` when KnotInfo gives it; otherwise the rigorous
-        bounds ``lo`` = lower bound of the bridge number (since :math:`i \\ge n`) and ``hi`` =
-        number of strings of the KnotInfo braid word. When ``lo == hi`` the braid index is in
-        fact determined, but :attr:`braid_index` stays ``None`` (it reports KnotInfo's value).
+    bridge_number_range : tuple of int or None
+        ``(lo, hi)``, bounds on the bridge number: ``(n, n)`` when known, the KnotInfo interval
+        otherwise.
+    braid_index_range : tuple of int or None
+        ``(lo, hi)``, bounds on the braid index: ``(i, i)`` when KnotInfo gives it; otherwise the
+        rigorous bounds ``lo`` = lower bound of the bridge number (since :math:`i \\ge n`) and
+        ``hi`` = number of strings of the KnotInfo braid word. When ``lo == hi`` the braid index is
+        in fact determined, but :attr:`braid_index` stays ``None`` (it reports KnotInfo's value).
     conway_notation : str or None
         KnotInfo's Conway notation (e.g. ``'[32]'`` for 5_2); two-box rational knots ``[ab]``
         are the paper's conjectured 4-fold-cage family (see :mod:`stiffknots.knots.cage_embedding`).

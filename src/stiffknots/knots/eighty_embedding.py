@@ -14,7 +14,7 @@ braid; this module builds a start that already is an 80, so that the search can 
 80's basin. The start only chooses the basin: the final shape and energy are the annealing's.
 
 Geometry of the smooth curve (design units: lobes about 2 long and 1.5 high; z is "up")
---------------------------------------------------------------------------------------
+---------------------------------------------------------------------------------------
 * Centre of the 8 at the origin: a twist box of ``c`` half-turns (``c`` odd, handedness
   ``sc``) — two strands along the x axis on a double helix of radius r, at y = ±r, z = 0 at
   its ends; ``c = 1`` is the plain crossing of the 8 (its strands tangent there rather than
@@ -45,7 +45,7 @@ is a component of its own: a two-component link); ``c`` odd keeps the 8 an 8 (ev
 it a twisted 0).
 
 Which knot a spec gives is not assumed: the curve is resampled into unit bonds
-(:func:`stiffknots.knots.cage_embedding._scaled_chain`, which also checks that the chords do
+(``stiffknots.knots.cage_embedding._scaled_chain()``, which also checks that the chords do
 not change the knot type), checked (bonds, exclusion) and identified (HOMFLY-PT, mirror images
 not told apart). :func:`eighty_table` lists the family; up to 10 crossings it holds 3_1, 4_1,
 5_1, 5_2, 6_1, 6_2, 6_3, 7_1, 7_2, 7_3, 7_5, 7_6, 8_1, 8_2, 8_6, 8_7, 8_8, 9_1, 9_3, 9_6,
@@ -116,7 +116,7 @@ class EightySpec:
         raises :class:`EmbeddingError` when built).
     sc, sk : int
         Handedness of the two twists, +1 or −1.
-    over : tuple of ints
+    over : tuple of int
         Whether the circle passes over (+1) or under (−1) each strand of the 8 it crosses, in
         its order along the circle. Route ``"B"``: two values, the upper (y > 0) and the lower
         (y < 0) strand near the centre; ``(+1, −1)`` and ``(−1, +1)`` hook the circle (a
@@ -543,7 +543,7 @@ def _curve_knot(spec: EightySpec) -> str:
 @functools.cache
 def _spec_for(name: str, n_beads: int, max_crossings: int) -> EightySpec | None:
     """The search of :func:`find_eighty` (its answer, None included), kept in the disk cache
-    (:mod:`stiffknots._diskcache`) under the knot, N, the diagram limit and the sources it
+    (``stiffknots._diskcache``) under the knot, N, the diagram limit and the sources it
     depends on: it identifies up to ~140 curves (2–5 s a knot, 36 s for a chain too short
     for every spec), which every process of a sweep and every `anneal` of a knot of the 80
     family repeated."""

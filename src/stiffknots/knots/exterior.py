@@ -1,7 +1,7 @@
 """Invariants beyond the HOMFLY-PT polynomial, from a diagram of the polygon: the hyperbolic
 volume and the isometry class of the knot complement (SnapPy), and knot Floer homology
-(``knot_floer_homology``, shipped with SnapPy). Used by :func:`stiffknots.knots.identify.
-identify_name` to break HOMFLY-PT ties and to give the chirality.
+(``knot_floer_homology``, shipped with SnapPy). Used by
+:func:`stiffknots.knots.identify.identify_name` to break HOMFLY-PT ties and to give the chirality.
 
 Why these invariants
 --------------------

@@ -296,13 +296,13 @@ def homfly_code(
     coords, closed: bool = True, *, max_cross: int = _MAX_CROSS, n_directions: int = 24
 ) -> str:
     """topoly's code of the HOMFLY-PT polynomial of the polygon (chiral); see
-    :func:`_homfly_code` for the method.
+    ``_homfly_code()`` for the method.
 
     In a process with other threads running (a Dask worker: its event loop opens and uses
-    sockets all the time) the computation runs in a forked child (:func:`_in_child`): topoly's
+    sockets all the time) the computation runs in a forked child (``_in_child()``): topoly's
     compiled code closes descriptor 0 whatever it is, and while it is closed another thread's new
     socket takes that number — the next call then closes a live connection (seen as "Bad file
-    descriptor" in the worker's heartbeats). :func:`_keep_stdin` alone cannot close that race.
+    descriptor" in the worker's heartbeats). ``_keep_stdin()`` alone cannot close that race.
     """
     if _threaded():
         return _in_child(lambda: _homfly_code(coords, closed, max_cross=max_cross,
@@ -548,10 +548,10 @@ class KnotNaming:
     candidates : tuple of str
         The names still possible: ``(name,)`` when named; several when a tie remains; empty
         when the polynomial is not in the tables.
-    chirality : {'+', '-', None}
-        Relative to KnotInfo's diagram of ``name`` (its ``pd_notation``): ``'+'`` the same
-        knot, ``'-'`` the mirror image; None for amphichiral knots, the unknot, composite
-        knots, ties, or when no invariant tells.
+    chirality : str or None
+        ``'+'``, ``'-'`` or None, relative to KnotInfo's diagram of ``name`` (its ``pd_notation``):
+        ``'+'`` the same knot, ``'-'`` the mirror image; None for amphichiral knots, the unknot,
+        composite knots, ties, or when no invariant tells.
     homfly : str
         :func:`identify`'s answer (the HOMFLY-PT candidates, '|'-joined).
     decided_by : tuple of str

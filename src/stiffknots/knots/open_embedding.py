@@ -66,17 +66,22 @@ def open_from_closed(x: np.ndarray, arm: int = 1, tail: int = 3, cut: int = 0) -
 
     Parameters
     ----------
-    x : (N_k, 3) closed chain with unit bonds.
-    arm : bonds of each horizontal arm (h ≥ 1).
-    tail : how far (in bond lengths) the vertical runs reach beyond the chain's z extent, at
+    x : ndarray
+        (N_k, 3) closed chain with unit bonds.
+    arm : int
+        Bonds of each horizontal arm (h ≥ 1).
+    tail : int
+        How far (in bond lengths) the vertical runs reach beyond the chain's z extent, at
         least. The free beads live between the clamped ends, so the slab must hold the
         relaxed knot: each run also reaches at least L_e/π (the diameter of a circle of the
         excess length, the open trefoil's loop) beyond the chain's z extent.
-    cut : which candidate cut to use (0 = the one with the largest clearance).
+    cut : int
+        Which candidate cut to use (0 = the one with the largest clearance).
 
     Returns
     -------
-    (N, 3) open chain, bead 0 at the bottom of the z axis, bead N−1 at the top.
+    ndarray
+        (N, 3) open chain, bead 0 at the bottom of the z axis, bead N−1 at the top.
     """
     x = np.asarray(x, dtype=float)
     if arm < 1 or tail < 2:
@@ -117,19 +122,27 @@ def embed_open(word, n_strands: int | None = None, n_knot_beads: int = 60, *, ar
 
     Parameters
     ----------
-    word : braid word of the knot (as for :func:`~stiffknots.knots.embedding.embed_braid`).
-    n_strands : number of strands of the braid.
-    n_knot_beads : beads N_k of the closed chain that is cut open; the excess length of the
+    word
+        Braid word of the knot (as for :func:`~stiffknots.knots.embedding.embed_braid`).
+    n_strands : int or None
+        Number of strands of the braid.
+    n_knot_beads : int
+        Beads N_k of the closed chain that is cut open; the excess length of the
         result is L_e = N_k + 2·arm − 2.
-    arm, tail : see :func:`open_from_closed`.
-    d_min : bead exclusion distance the result satisfies.
-    expected : if given, the knot type the closure along z must have (verified with topoly);
+    arm, tail : int
+        See :func:`open_from_closed`.
+    d_min : float
+        Bead exclusion distance the result satisfies.
+    expected : str or None
+        If given, the knot type the closure along z must have (verified with topoly);
         candidate cuts are tried until one verifies.
-    seed : passed to the closed embedding (a random rotation / bead numbering).
+    seed : int or None
+        Passed to the closed embedding (a random rotation / bead numbering).
 
     Returns
     -------
-    (N, 3) open chain; bonds are unit, beads 0, 1, N−2, N−1 on the z axis.
+    ndarray
+        (N, 3) open chain; bonds are unit, beads 0, 1, N−2, N−1 on the z axis.
     """
     from stiffknots.knots.identify import close_open_chain_along_z, verify_knot
 

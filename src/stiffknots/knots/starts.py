@@ -78,7 +78,7 @@ def _build(knot, start: str, n_beads: int) -> np.ndarray:
 def available_starts(knot, n_beads: int = 150, starts=ALL_STARTS) -> list[str]:
     """The ``starts`` (default :data:`ALL_STARTS`) that exist for ``knot`` at ``n_beads`` beads.
 
-    A start is available when :func:`start_chain` builds it (an :class:`EmbeddingError` means
+    A start is available when :func:`start_chain` builds it (an :class:`.EmbeddingError` means
     the knot is outside that start's family or does not fit).
     """
     from stiffknots.knots.embedding import EmbeddingError
@@ -157,11 +157,15 @@ def resolve_starts(knot, start, replicas: int, n_beads: int = 150) -> list[str]:
 
     Parameters
     ----------
-    knot : catalogue entry.
-    start : ``'all'`` (every available start, shared round-robin), one name of :data:`STARTS`
+    knot
+        Catalogue entry.
+    start
+        ``'all'`` (every available start, shared round-robin), one name of :data:`STARTS`
         (every replica), or a sequence of ``replicas`` names.
-    replicas : number of replicas.
-    n_beads : number of beads (a start must fit in it to be available).
+    replicas : int
+        Number of replicas.
+    n_beads : int
+        Number of beads (a start must fit in it to be available).
 
     Raises
     ------

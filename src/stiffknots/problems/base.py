@@ -68,20 +68,29 @@ class Replica(ReplicaResult):
 
     Attributes
     ----------
-    knot : the requested knot's catalogue name when verified; otherwise the type the invariant
+    knot : str or None
+        The requested knot's catalogue name when verified; otherwise the type the invariant
         identifies.
-    knot_verified : True when the final chain has the HOMFLY-PT polynomial of its start.
-    knot_check : how the type was confirmed (module docstring).
-    polish : what the final minimiser did (module docstring; None if it was not applied).
-    start : the starting embedding (``braid``, ``cage``, ``eighty``, ``open``).
-    lineage : the independent search this replica belongs to: the index of the replica that
+    knot_verified : bool or None
+        True when the final chain has the HOMFLY-PT polynomial of its start.
+    knot_check : str or None
+        How the type was confirmed (module docstring).
+    polish : dict or None
+        What the final minimiser did (module docstring; None if it was not applied).
+    start : str or None
+        The starting embedding (``braid``, ``cage``, ``eighty``, ``open``).
+    lineage : int or None
+        The independent search this replica belongs to: the index of the replica that
         started it from an embedding (its own index for such a replica); a continuation leg
         (basin hops from a finished replica's chain, see :func:`solve`) keeps its parent's.
-    leg : 0 for a replica started from an embedding, k for the k-th continuation of its
+    leg : int
+        0 for a replica started from an embedding, k for the k-th continuation of its
         lineage.
-    observables : problem-specific numbers (e.g. ``length_over_R`` of §IX D), also
+    observables : dict
+        Problem-specific numbers (e.g. ``length_over_R`` of §IX D), also
         readable as attributes (``r.length_over_R``).
-    wall_time, cpu_time : the whole replica — Monte Carlo, final minimiser and knot check
+    wall_time, cpu_time
+        The whole replica — Monte Carlo, final minimiser and knot check
         (the Monte Carlo alone: ``traces["seconds"][-1]``; the minimiser: ``polish["seconds"]``).
     """
 
@@ -163,7 +172,7 @@ def knot_code(coords: np.ndarray, closed: bool = True) -> str:
 def start_code(knot_name: str, coords: np.ndarray, closed: bool, start: str) -> str:
     """The polynomial of a starting chain, after checking that it is the requested knot.
 
-    The answer is kept in the disk cache (:mod:`stiffknots._diskcache`) under the chain's exact
+    The answer is kept in the disk cache (``stiffknots._diskcache``) under the chain's exact
     bytes, the knot, the start, the package version and topoly's version: the built-in
     embeddings are deterministic, so every later command on the same knot reads its start's
     polynomial instead of importing topoly (≈ 1.4 s) and computing it in the parent; a chain
@@ -414,7 +423,7 @@ class Problem:
 
     def state_of(self, r: Replica) -> tuple[str, float]:
         """The state a finished replica reached: (shape label, value); replicas of the same
-        label and value within ``rel_tol`` are one state (see :func:`verdict`)."""
+        label and value within ``rel_tol`` are one state (see :func:`.verdict`)."""
         return "", self.sort_key(r)
 
     # -- helpers of the subclasses' constructors and jobs -----------------------------------
@@ -501,9 +510,12 @@ class Problem:
                 for r in range(first, first + n)]
 
     def bounds(self) -> dict:
+        """The paper's bounds on the problem's value (``lower``, ``upper``, ``attained_by``);
+        empty when it has none."""
         return {}
 
     def settings_dict(self) -> dict:
+        """The settings of the run as plain data (the result's ``settings``)."""
         raise NotImplementedError
 
     def width(self) -> Width:
@@ -511,12 +523,14 @@ class Problem:
         return self.settings.params.width(self.beads, closed=self.result_type.closed)
 
     def sort_key(self, r: Replica) -> float:
+        """The value replicas are ranked by, lower is better (default: ε)."""
         return r.epsilon
 
     def observe(self, r: Replica) -> None:
         """Add problem-specific numbers to a finished replica (parent process)."""
 
     def result_fields(self, replicas: list[Replica]) -> dict[str, Any]:
+        """Extra fields of the result, from the finished replicas (default: none)."""
         return {}
 
 

@@ -31,7 +31,8 @@ from stiffknots.problems.base import (
     solve,
 )
 
-DEFAULT_ROUNDS = 8  # rounds of replicas until the lowest state is reached by two searches
+#: rounds of replicas until the lowest state is reached by two searches
+DEFAULT_ROUNDS = 8
 #: the rounds of a ``langevin`` schedule by default (``stiffknots anneal``): a replica of 10⁶
 #: dynamics steps costs about half an annealing replica (≈ 4.4 s at N = 150) and easy knots
 #: stop after a few rounds; through 8 crossings 8_7 and 8_2 converge after 34 and 51 rounds,
@@ -290,48 +291,66 @@ def anneal(
 
     Parameters
     ----------
-    knot : knot name in any usual spelling ('4_1', '4.1', 'K11a1', 'T(2,3)').
-    beads : number of beads N (bond length 1, so the chain length L = N).
-    moves : attempted moves per replica (annealing plus the final quench); default
+    knot : str
+        Knot name in any usual spelling ('4_1', '4.1', 'K11a1', 'T(2,3)').
+    beads : int
+        Number of beads N (bond length 1, so the chain length L = N).
+    moves : int or None
+        Attempted moves per replica (annealing plus the final quench); default
         :func:`default_moves` (15 M at N = 150, scaled as N).
-    replicas : independent replicas; they run in parallel on ``workers`` processes
+    replicas : int
+        Independent replicas; they run in parallel on ``workers`` processes
         (default: all cores).
-    seed : user seed; replica seeds are derived from it (recorded in every result).
-    schedule, params : cooling schedule and move/exclusion parameters (defaults documented in
+    seed : int
+        User seed; replica seeds are derived from it (recorded in every result).
+    schedule, params
+        Cooling schedule and move/exclusion parameters (defaults documented in
         :class:`Schedule` and :class:`MoveParams`; the default schedule's temperatures scale
         as (150/N)² and the default m_max is N/2, so that the same search runs at any N).
-    quench_fraction : fraction of the moves spent in the final T = 0 quench.
-    target_epsilon : if given, each replica records the wall time at which ε first fell below.
-    on_replica_done : callback called in the parent process as each replica finishes.
-    checkpoint_dir : if given, every replica writes ``replica_K.ckpt.npz`` there every 10
+    quench_fraction : float
+        Fraction of the moves spent in the final T = 0 quench.
+    target_epsilon : float or None
+        If given, each replica records the wall time at which ε first fell below.
+    on_replica_done : callable or None
+        Callback called in the parent process as each replica finishes.
+    checkpoint_dir : str or Path or None
+        If given, every replica writes ``replica_K.ckpt.npz`` there every 10
         chunks (of 210), every ``checkpoint_seconds`` seconds and when it ends (positions,
         generator state, counters, energy, chunk index, traces, best chain, settings, seed,
         version).
-    resume : continue every replica from its checkpoint in ``checkpoint_dir`` when there is
+    resume : bool
+        Continue every replica from its checkpoint in ``checkpoint_dir`` when there is
         one (the call must repeat the same knot, beads, moves, seed and settings; a mismatch
         raises CheckpointError); the result is exactly that of an uninterrupted run.
-    checkpoint_seconds : wall-clock seconds between checkpoints (None: chunks only).
-    start : starting embedding: ``'braid'`` (closure of KnotInfo's braid word), ``'cage'``
+    checkpoint_seconds : float or None
+        Wall-clock seconds between checkpoints (None: chunks only).
+    start : str or sequence of str
+        Starting embedding: ``'braid'`` (closure of KnotInfo's braid word), ``'cage'``
         (the 4-fold cage of a two-box rational knot [ab], §VII; see
         :mod:`stiffknots.knots.starts`), ``'eighty'``, ``'all'`` (the default: braid, the cage
         where it exists and the 80 for the knots of the 80 family,
         :func:`stiffknots.knots.starts.default_starts`; replica r of any round takes the
         (r mod k)-th), or one start per replica (a sequence of ``replicas`` names). Recorded in
         the settings and in every replica.
-    rounds, agree, rel_tol : the convergence rule: after each round of ``replicas`` replicas,
+    rounds, agree, rel_tol
+        The convergence rule: after each round of ``replicas`` replicas,
         the run stops when the lowest state (its shape class and ε within ``rel_tol``) was
         reached by at least ``agree`` replicas, and otherwise runs another round, up to
         ``rounds`` rounds; ``rounds=1`` is a fixed budget. The result says ``converged`` and
         why (:func:`stiffknots.problems.base.verdict`).
-    on_progress : receives progress records of the running replicas (moves done, best ε).
-    initial : a closed curve (:class:`~stiffknots.chain.Chain` of any bond lengths) to start
+    on_progress : callable or None
+        Receives progress records of the running replicas (moves done, best ε).
+    initial
+        A closed curve (:class:`~stiffknots.chain.Chain` of any bond lengths) to start
         every replica from instead of the built-in embeddings: it is named (``knot`` is then
         checked against it), resampled to ``beads`` unit bonds with its type kept and checked
         (:func:`stiffknots.problems.relax.prepare_curve`).
-    polish : take every replica's best chain to its local minimum with the final minimiser
+    polish : bool
+        Take every replica's best chain to its local minimum with the final minimiser
         (:func:`stiffknots.engine.polish.polish`; unit bonds and exclusion held exactly, no
         strand passage); its report is in each replica's ``polish``.
-    tube_route : in a bead-rule run (with ``polish``), the new searches from the third round
+    tube_route : bool
+        In a bead-rule run (with ``polish``), the new searches from the third round
         on anneal under the tube rule of diameter w = d and are polished under the bead rule
         (:data:`TUBE_ROUTE_FROM`; each such replica says so in ``observables["search"]``);
         default False: every search is the bead rule's own Monte Carlo (the route's grounds

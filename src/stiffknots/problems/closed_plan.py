@@ -92,18 +92,27 @@ class AnnealPlan:
 
     Attributes
     ----------
-    knot : the catalogue entry, resolved once.
-    width : the exclusion model, its thickness, N and w/L.
-    schedule : the cooling schedule (its ``kind`` the schedule that runs).
-    chosen_by : why this schedule: ``"named"`` (given by name), ``"auto"`` (the default
+    knot : Knot
+        The catalogue entry, resolved once.
+    width : Width
+        The exclusion model, its thickness, N and w/L.
+    schedule : Schedule
+        The cooling schedule (its ``kind`` the schedule that runs).
+    chosen_by : str
+        Why this schedule: ``"named"`` (given by name), ``"auto"`` (the default
         search) or ``"monte_carlo"`` (auto, and an option of the Monte Carlo was given: then
         :attr:`monte_carlo` names them).
-    monte_carlo : the parameters given that only the Monte Carlo has (``"exclusion"`` stands
+    monte_carlo : list of str
+        The parameters given that only the Monte Carlo has (``"exclusion"`` stands
         for the tube model), in the order of :func:`plan_anneal`'s signature.
-    rounds : the most rounds.
-    params : the moves and the exclusion model.
-    coarse : the bead count of the coarse stage, or None.
-    initial : the user's curve every replica starts from, or None.
+    rounds : int
+        The most rounds.
+    params : MoveParams
+        The moves and the exclusion model.
+    coarse : int or None
+        The bead count of the coarse stage, or None.
+    initial : Chain or None
+        The user's curve every replica starts from, or None.
     """
 
     knot: Knot
@@ -202,25 +211,35 @@ def plan_anneal(knot: Knot | str, *, beads: int | None = None, moves: int | None
 
     Parameters
     ----------
-    knot : the knot (a catalogue entry or any usual spelling of its name).
-    beads : N; default 150, or with ``w_over_L`` the N rule (:func:`beads_for_knot`:
+    knot : Knot or str
+        The knot (a catalogue entry or any usual spelling of its name).
+    beads : int or None
+        N; default 150, or with ``w_over_L`` the N rule (:func:`beads_for_knot`:
         discretisation error ε/(6N²) below 0.1 %).
-    exclusion, w, w_over_L : the width (:func:`~stiffknots.problems.validate.width`);
+    exclusion, w, w_over_L
+        The width (:func:`~stiffknots.problems.validate.width`);
         ``w_over_L`` sets the tube model.
-    schedule : ``"auto"`` — the Langevin dynamics for the bead rule, the paper's Monte Carlo
+    schedule : str
+        ``"auto"`` — the Langevin dynamics for the bead rule, the paper's Monte Carlo
         annealing (geometric cooling, §VII) when an option that only the Monte Carlo has is
         given (the tube model, ``tube_route``, ``checkpoint_dir``, ``relax_fraction``,
         ``delta``, ``m_max``, ``coarse``) — or a schedule by name
         (:data:`~stiffknots.engine.schedules.SCHEDULES`).
-    rounds : the most rounds (default :data:`~stiffknots.problems.closed.LANGEVIN_ROUNDS` for
+    rounds : int or None
+        The most rounds (default :data:`~stiffknots.problems.closed.LANGEVIN_ROUNDS` for
         the Langevin schedule, :data:`~stiffknots.problems.closed.DEFAULT_ROUNDS` otherwise).
-    t_start, t_end, relax_fraction : the schedule's (None: its defaults at this N).
-    delta, m_max : the Monte Carlo moves' (None: defaults).
-    initial : a closed curve every replica starts from (``knot`` is checked against it), or
+    t_start, t_end, relax_fraction : float or None
+        The schedule's (None: its defaults at this N).
+    delta, m_max
+        The Monte Carlo moves' (None: defaults).
+    initial : Chain or str or Path or None
+        A closed curve every replica starts from (``knot`` is checked against it), or
         the file that holds it (:func:`read_curve`, read after every other check).
-    coarse : anneal first at this many beads and start the fine run from the lowest chain
+    coarse : int or None
+        Anneal first at this many beads and start the fine run from the lowest chain
         (:meth:`AnnealPlan.coarse_start`).
-    The others: :class:`~stiffknots.problems.closed.ClosedAnneal`.
+    moves, replicas, seed, checkpoint_dir, resume, start, polish, tube_route
+        The others: :class:`~stiffknots.problems.closed.ClosedAnneal`.
 
     Raises
     ------

@@ -204,16 +204,19 @@ def anneal_open(knot: str, excess_length: int = 80, moves: int = DEFAULT_OPEN_MO
 
     Parameters
     ----------
-    knot : knot name ('3_1', '4_1', …).
-    excess_length : L_e in bond lengths (integer in [8, 10000]; the knot needs a minimum,
+    knot : str
+        Knot name ('3_1', '4_1', …).
+    excess_length : int
+        L_e in bond lengths (integer in [8, 10000]; the knot needs a minimum,
         reported if too small).
-    moves, replicas, seed, params, schedule, workers, quench_fraction, on_replica_done :
-        as for :func:`stiffknots.anneal`. ``params.exclusion = "tube"`` with a small ``w``
+    moves, replicas, seed, params, schedule, workers, quench_fraction, on_replica_done
+        As for :func:`stiffknots.anneal`. ``params.exclusion = "tube"`` with a small ``w``
         approaches the thin limit.
 
     Returns
     -------
-    OpenResult — replicas sorted by energy; ``eps_e``, ``tension``, ``shape()``.
+    OpenResult
+        Replicas sorted by energy; ``eps_e``, ``tension``, ``shape()``.
 
     Raises
     ------

@@ -205,24 +205,34 @@ def anneal_open_force(knot: str, force: float, n_beads: int | None = None,
 
     Parameters
     ----------
-    knot : knot name ('3_1', '4_1', …).
-    force : F > 0 in C/b².
-    n_beads : beads of the chain: the open embedding is lengthened along the axis to this many
+    knot : str
+        Knot name ('3_1', '4_1', …).
+    force : float
+        F > 0 in C/b².
+    n_beads : int or None
+        Beads of the chain: the open embedding is lengthened along the axis to this many
         (default: by ⌈L_e/4⌉ beads at each end, see :func:`start_chain`).
-    moves, replicas, seed, params, workers, quench_fraction, on_replica_done :
-        as for :func:`stiffknots.problems.open_extension.anneal_open`.
-    schedule : default :func:`default_force_schedule` (geometric, no relaxation stage).
-    excess_length : excess length of the starting embedding (default: near (ε_e C/F)^½ with
+    moves, replicas, seed, params, workers, quench_fraction, on_replica_done
+        As for :func:`stiffknots.problems.open_extension.anneal_open`.
+    schedule : Schedule or None
+        Default :func:`default_force_schedule` (geometric, no relaxation stage).
+    excess_length : int or None
+        Excess length of the starting embedding (default: near (ε_e C/F)^½ with
         the thin-limit ε_e; see :func:`start_chain`). The annealing moves it.
-    end_fraction : fraction of the moves that move an end (slide and pivot moves).
-    slide_fraction : fraction of the end moves that are slides (the others are pivots).
-    end_m_max : largest number of beads rotated by a pivot move.
-    checkpoint_dir, resume, checkpoint_seconds : checkpoints, as for :func:`stiffknots.anneal`.
+    end_fraction : float
+        Fraction of the moves that move an end (slide and pivot moves).
+    slide_fraction : float
+        Fraction of the end moves that are slides (the others are pivots).
+    end_m_max : int
+        Largest number of beads rotated by a pivot move.
+    checkpoint_dir, resume, checkpoint_seconds
+        Checkpoints, as for :func:`stiffknots.anneal`.
 
     Returns
     -------
-    ForceResult — replicas sorted by E_d − F·Δz; ``excess_length`` (measured), ``eps_e``,
-    ``tension`` (μ = E_d/L_e), ``force``, ``force_balance`` (μ/F), ``shape()``.
+    ForceResult
+        Replicas sorted by E_d − F·Δz; ``excess_length`` (measured), ``eps_e``,
+        ``tension`` (μ = E_d/L_e), ``force``, ``force_balance`` (μ/F), ``shape()``.
 
     Raises
     ------

@@ -234,9 +234,17 @@ def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
 
     Returns
     -------
-    (results in completion order, interrupted) — ``interrupted`` is True after Ctrl-C.
-    An exception raised by a job is raised here (the other workers are terminated); a worker
-    that dies (a crash, the out-of-memory killer) raises :class:`WorkerError`.
+    results : list
+        The results in completion order.
+    interrupted : bool
+        True after Ctrl-C.
+
+    Raises
+    ------
+    Exception
+        An exception raised by a job is raised here (the other workers are terminated).
+    WorkerError
+        A worker that dies (a crash, the out-of-memory killer).
     """
     global _PROGRESS
     results: list[Any] = []

@@ -201,18 +201,24 @@ def relax(chain: Chain | np.ndarray, beads: int = 150, moves: int | None = None,
 
     Parameters
     ----------
-    chain : a closed :class:`~stiffknots.chain.Chain` (or its (M, 3) coordinates).
-    beads : N of the resampled chain (bond length 1, L = N).
-    moves : Monte Carlo moves per replica (default :data:`RELAX_MOVES_PER_BEAD` per bead,
+    chain : Chain or ndarray
+        A closed :class:`~stiffknots.chain.Chain` (or its (M, 3) coordinates).
+    beads : int
+        N of the resampled chain (bond length 1, L = N).
+    moves : int or None
+        Monte Carlo moves per replica (default :data:`RELAX_MOVES_PER_BEAD` per bead,
         12 M at N = 150).
-    exclusion, w_over_L : the paper's bead rule (``"bead"``, d = 1/√2 bond) or a tube of
+    exclusion, w_over_L
+        The paper's bead rule (``"bead"``, d = 1/√2 bond) or a tube of
         diameter w = w_over_L · N (``"tube"``).
-    knot : the knot's name, if the invariants cannot tell (a HOMFLY-PT tie) or to check it.
+    knot : str or None
+        The knot's name, if the invariants cannot tell (a HOMFLY-PT tie) or to check it.
 
     Returns
     -------
-    RelaxResult — ``input_epsilon`` (the curve as given), ``epsilon`` and ``shape`` of the
-    relaxed chain, ``converged`` (the replicas agree), and the naming evidence.
+    RelaxResult
+        ``input_epsilon`` (the curve as given), ``epsilon`` and ``shape`` of the relaxed chain,
+        ``converged`` (the replicas agree), and the naming evidence.
     """
     if not isinstance(chain, Chain):
         chain = Chain(chain, closed=True)

@@ -150,23 +150,30 @@ def tightest(knot: str, beads: int = 150, moves: int = DEFAULT_TIGHT_MOVES, repl
 
     Parameters
     ----------
-    knot : knot name.
-    beads : N; finer chains approach the thin limit (the exclusion is fixed in bond lengths).
-    moves : attempted moves per replica, shared equally by the stages and the final quench.
-    replicas, seed, workers : as for :func:`stiffknots.anneal`.
-    exclusion, d, w : exclusion model and distances in bond lengths. The thin knot of §IX D
+    knot : str
+        Knot name.
+    beads : int
+        N; finer chains approach the thin limit (the exclusion is fixed in bond lengths).
+    moves : int
+        Attempted moves per replica, shared equally by the stages and the final quench.
+    replicas, seed, workers
+        As for :func:`stiffknots.anneal`.
+    exclusion, d, w
+        Exclusion model and distances in bond lengths. The thin knot of §IX D
         has no thickness: the default is a thin tube, w = :data:`DEFAULT_TIGHT_W` = 0.25 (the
         paper's bead rule, d = 1/√2, is available and gives longer knots at a given N).
-    powers : the continuation p = 1 (the bending energy, annealed as in §VII), 2, 4, …, 64
+    powers : tuple of int
+        The continuation p = 1 (the bending energy, annealed as in §VII), 2, 4, …, 64
         of the minimax energy Σ((1 − cos θ)/s)^p.
-    start : starting embedding(s), as for :func:`stiffknots.anneal`: ``'all'`` (default: every
+    start : str or sequence of str
+        Starting embedding(s), as for :func:`stiffknots.anneal`: ``'all'`` (default: every
         start that exists for the knot, round-robin over the replicas), ``'braid'``, ``'cage'``
         (two-box rational knots; see :mod:`stiffknots.knots.starts`) or one per replica.
 
     Returns
     -------
-    TightResult — ``length_over_R`` of the best replica and the bounds 2πn ≤ L†/R ≤
-    2π min(7n/3, i).
+    TightResult
+        ``length_over_R`` of the best replica and the bounds 2πn ≤ L†/R ≤ 2π min(7n/3, i).
     """
     problem = Tightest(knot, beads, moves, replicas, seed, exclusion=exclusion, d=d, w=w,
                        powers=powers, start=start)

@@ -20,6 +20,7 @@ MIN_BEADS = 8
 MAX_BEADS = 20_000
 MIN_MOVES = 1_000
 MAX_MOVES = 10**12
+#: the most replicas of one run (a documented limit)
 MAX_REPLICAS = 1_000
 MAX_SEED = 2**63 - 1
 MIN_EXCESS_LENGTH = 8
@@ -56,24 +57,29 @@ def number(name: str, value: Any, lo: float | None = None, hi: float | None = No
 
 
 def choice(name: str, value: Any, allowed: Sequence[str]) -> str:
+    """``value`` as a str if it is one of ``allowed``."""
     if value not in allowed:
         raise InvalidParameter(name, value, "one of " + ", ".join(map(str, allowed)))
     return str(value)
 
 
 def beads(value: Any, name: str = "beads") -> int:
+    """``value`` as a number of beads in ``[MIN_BEADS, MAX_BEADS]``."""
     return integer(name, value, MIN_BEADS, MAX_BEADS)
 
 
 def moves(value: Any, name: str = "moves") -> int:
+    """``value`` as a number of moves in ``[MIN_MOVES, MAX_MOVES]``."""
     return integer(name, value, MIN_MOVES, MAX_MOVES)
 
 
 def replicas(value: Any, name: str = "replicas") -> int:
+    """``value`` as a number of replicas in [1, :data:`MAX_REPLICAS`]."""
     return integer(name, value, 1, MAX_REPLICAS)
 
 
 def seed(value: Any, name: str = "seed") -> int:
+    """``value`` as a seed in ``[0, MAX_SEED]``."""
     return integer(name, value, 0, MAX_SEED)
 
 

@@ -374,9 +374,17 @@ def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
         (eq. (45)), i.e. ``2 pi^2 n1^2`` and ``2 pi^2 min(alpha^2 n1^2, i1^2)`` with
         ``n1 = n - 1``, ``i1 = i - 1``; one line when they coincide (the open trefoil:
         ``mu* = 2 pi^2 / L_e^2``).
-    labels, title : as for :func:`plot_eps_vs_n2`.
+    labels, title
+        As for :func:`plot_eps_vs_n2`.
 
-    Returns the matplotlib Axes; ValueError if a point lacks a field or has ``L_e <= 0``.
+    Returns
+    -------
+    matplotlib Axes
+
+    Raises
+    ------
+    ValueError
+        If a point lacks a field or has ``L_e <= 0``.
     """
     pts = _points(points, ("knot", "L_e", "mu", "n"))
     ax = _new_ax(ax)

@@ -127,17 +127,19 @@ class TubeMesh:
 
     Attributes
     ----------
-    vertices : ndarray, shape (R, S, 3)
-        Ring ``k`` (one per bead, ``R = N``) has ``S = n_sides`` vertices.
-    quads : ndarray of int, shape (F, 4)
-        Faces as indices into ``vertices.reshape(-1, 3)``, counter-clockwise seen from outside;
-        ``F = N * S`` for a closed chain, ``(N - 1) * S`` for an open one.
-    caps : ndarray of int, shape (C, S)
-        End caps (``C = 2`` for an open chain, 0 for a closed one), indices as for ``quads``.
-    centres : ndarray, shape (R, 3)
-        The centre of each ring (the bead).
-    tangents : ndarray, shape (R, 3)
-        Unit normal of the plane of each ring (the bisector of the two bonds at the bead).
+    vertices : ndarray
+        Shape ``(R, S, 3)``: ring ``k`` (one per bead, ``R = N``) has ``S = n_sides`` vertices.
+    quads : ndarray of int
+        Shape ``(F, 4)``: faces as indices into ``vertices.reshape(-1, 3)``, counter-clockwise seen
+        from outside; ``F = N * S`` for a closed chain, ``(N - 1) * S`` for an open one.
+    caps : ndarray of int
+        Shape ``(C, S)``: end caps (``C = 2`` for an open chain, 0 for a closed one), indices as for
+        ``quads``.
+    centres : ndarray
+        Shape ``(R, 3)``: the centre of each ring (the bead).
+    tangents : ndarray
+        Shape ``(R, 3)``: unit normal of the plane of each ring (the bisector of the two bonds at
+        the bead).
     radius : float
     closed : bool
     """

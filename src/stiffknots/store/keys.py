@@ -48,7 +48,7 @@ def canonical_json(settings: Mapping[str, Any]) -> str:
 
     Keys sorted at every level, no whitespace, floats written by ``repr`` (the shortest text
     that reads back to the same float: ``0.1`` stays ``0.1``), numpy scalars and arrays turned
-    into plain Python values (:func:`stiffknots._json.to_plain`), tuples into lists, non-ASCII
+    into plain Python values (``stiffknots._json.to_plain()``), tuples into lists, non-ASCII
     kept as is.
 
     Raises

@@ -268,12 +268,15 @@ def row_from_replica(result: Any, *, knot: str, width: Width, seed: int,
     ----------
     result : object
         With the attributes above and ``coords``.
-    knot, seed, settings : the key fields the result does not carry.
+    knot, seed, settings
+        The key fields the result does not carry.
     width : Width
         The exclusion model, its thickness, N and w/L (the key's ``exclusion``, ``thickness``
         and ``beads``, and the row's ``w_over_L``).
-    shape, multiplicity, converged : optional classification and convergence verdict.
-    **fields : further row fields (``problem``, ``created``, ...).
+    shape, multiplicity, converged
+        Optional classification and convergence verdict.
+    **fields
+        Further row fields (``problem``, ``created``, ...).
 
     Returns
     -------

@@ -20,8 +20,8 @@ Concurrency and safety
 States
 ------
 Rows are grouped into states per *ensemble*: one knot, one exclusion model, one bead count,
-one thickness (its key text) and one settings hash (:data:`~stiffknots.store.schema.
-ENSEMBLE_FIELDS`). Replicas of different seeds and starts of one run configuration are pooled;
+one thickness (its key text) and one settings hash (:data:`~.schema.ENSEMBLE_FIELDS`).
+Replicas of different seeds and starts of one run configuration are pooled;
 rows that differ in N, width, model or any setting are never mixed into one state. Within an
 ensemble the rule is that of :func:`stiffknots.analysis.states.group_states` (called with the
 stored shape labels): same shape class and multiplicity, ε within ``rel_tol`` of the state's

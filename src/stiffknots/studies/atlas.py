@@ -119,7 +119,7 @@ def _model_json(m: Width, st: Mapping | None) -> dict:
 def bead_above_tube(rec: Mapping) -> dict | None:
     """A bead-rule ground state above the tube ground state of the same knot, N and
     thickness (d = w), or None. Every tube-admissible chain is bead-admissible (beads i, j
-    with |i − j| ≥ 2 are ends of segments that share no bead, hence ≥ w apart), so the bead
+    with ``|i − j| ≥ 2`` are ends of segments that share no bead, hence ≥ w apart), so the bead
     rule's minimum is at most the tube's: a bead ground above it is a search that missed,
     by at least the difference (measured: 10_4 at N = 150, 260.73 against 223.89)."""
     found = {v["model"].exclusion: v for v in rec["models"].values()
@@ -439,8 +439,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
     out : path
         The atlas folder (``index.html``, ``knots/``, ``atlas.json``, ``families.json``,
         ``eps_vs_n2.png``).
-    seed, scheduler, workers, max_replicas, listener : see
-        :func:`stiffknots.sweeps.run_sweep` (``max_replicas``: replicas added to the
+    seed, scheduler, workers, max_replicas, listener
+        See :func:`stiffknots.sweeps.run_sweep` (``max_replicas``: replicas added to the
         (knot, model)s not converged, up to that many in all).
     thumbnails : bool
         Draw the ground-state thumbnails.

@@ -182,6 +182,7 @@ def run_open_study(budget: str = "small", out_dir: str | Path = "results/open", 
 
 
 def main() -> None:
+    """The command line of the module docstring (``--budget``, ``--out``, ``--seed``)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--budget", default="small", choices=sorted(BUDGETS))
     ap.add_argument("--out", default="results/open")

@@ -21,8 +21,8 @@ the minimum energy ``eps*_w`` of a tube of width ``w`` as ``w/L -> 0``; ``eps*_w
    points of the thinnest point's shape and states ``eps*`` with an error bar: fit
    (statistical and exponent) and discretisation in quadrature;
 5. compares with the structure route: ``CB(i) = 2 pi^2 i^2`` (eq. (30)), the 80 and the
-   4-fold cage ``eps*_4C`` solved at ``w = 0`` (:func:`stiffknots.theory.structures.
-   structure_energy`).
+   4-fold cage ``eps*_4C`` solved at ``w = 0``
+   (:func:`stiffknots.theory.structures.structure_energy`).
 
 Nothing here is a thin-limit number except ``epsilon_thin``: every point states its ``w/L``
 and ``N``.
@@ -57,13 +57,20 @@ class Budget:
 
     Attributes
     ----------
-    widths : the series of ``w/L``, widest first.
-    rel_error : relative discretisation error of the N rule (before the correction).
-    moves_factor : annealing moves per replica, as a fraction of :func:`default_moves` (N).
-    relax_factor : relaxation moves of a continuation step, same unit.
-    rounds, replicas : the convergence rule of each annealing (rounds of replicas).
-    anneal_each : anneal every width afresh too (else only the widest one).
-    measure_k : measure the discretisation coefficient ``k`` at the thinnest width (2 N).
+    widths : tuple of float
+        The series of ``w/L``, widest first.
+    rel_error : float
+        Relative discretisation error of the N rule (before the correction).
+    moves_factor : float
+        Annealing moves per replica, as a fraction of :func:`default_moves` (N).
+    relax_factor : float
+        Relaxation moves of a continuation step, same unit.
+    rounds, replicas : int
+        The convergence rule of each annealing (rounds of replicas).
+    anneal_each : bool
+        Anneal every width afresh too (else only the widest one).
+    measure_k : bool
+        Measure the discretisation coefficient ``k`` at the thinnest width (2 N).
     """
 
     widths: tuple[float, ...]
@@ -76,6 +83,7 @@ class Budget:
     measure_k: bool
 
 
+#: the named budgets of the study, by name
 BUDGETS = {
     # a few minutes per knot on two cores
     "small": Budget(widths=(0.004, 0.002, 0.001, 0.0005), rel_error=2e-3, moves_factor=0.25,
@@ -154,16 +162,23 @@ def thin_limit(knot, budget: str = "small", seed: int = 0, *,
 
     Parameters
     ----------
-    knot : a catalogue entry (:class:`~stiffknots.knots.catalogue.Knot`) or name.
-    budget : ``"small"`` (minutes) or ``"default"`` (up to about 15 min per knot on 2 cores);
+    knot
+        A catalogue entry (:class:`~stiffknots.knots.catalogue.Knot`) or name.
+    budget : str
+        ``"small"`` (minutes) or ``"default"`` (up to about 15 min per knot on 2 cores);
         see :data:`BUDGETS`.
-    seed : the seed of every run (replica seeds derive from it).
-    widths : the series of ``w/L`` (default: the budget's), at least two.
-    beads : N of every point (default: :func:`~stiffknots.problems.validate.beads_for_width`
+    seed : int
+        The seed of every run (replica seeds derive from it).
+    widths : sequence of float or None
+        The series of ``w/L`` (default: the budget's), at least two.
+    beads : int or None
+        N of every point (default: :func:`~stiffknots.problems.validate.beads_for_width`
         with the knot's upper bound as the energy estimate).
-    runner : ``runner(problem, label)`` solves one problem (the command line passes one with
+    runner : callable or None
+        ``runner(problem, label)`` solves one problem (the command line passes one with
         live progress); default :func:`~stiffknots.problems.base.solve`.
-    say : receives one line per finished step.
+    say : callable or None
+        Receives one line per finished step.
 
     Returns
     -------

@@ -175,6 +175,7 @@ class Budget:
                    if self.bead_search == "langevin" else {})}
 
 
+#: the named budgets of a sweep (``--budget``)
 BUDGETS: dict[str, Budget] = {
     "tiny": Budget("tiny", 2, 200_000),
     "small": Budget("small", 2, 5_000_000),

@@ -24,7 +24,7 @@ Remote (``scheduler="tcp://host:port"``)
 :data:`PROGRESS_TOPIC` (at most one per :data:`PROGRESS_PERIOD` seconds per job). The
 problems are built on the workers, not on the client: building computes HOMFLY-PT
 polynomials with topoly, whose compiled code closes file descriptor 0 (see
-:func:`stiffknots.knots.identify._keep_stdin`) — harmless in a worker, a hazard beside the
+``stiffknots.knots.identify._keep_stdin()``) — harmless in a worker, a hazard beside the
 client's sockets — and it spreads the building over the workers.
 """
 

@@ -91,7 +91,7 @@ def own_hits(ground: Mapping[str, Any] | None) -> int:
 
 
 def is_converged(ground: Mapping[str, Any] | None) -> bool:
-    """Whether a ground state (a state of :meth:`Store.states`: ``epsilon`` — the lowest ε —,
+    """Whether a ground state (a state of :meth:`.Store.states`: ``epsilon`` — the lowest ε —,
     ``eps_all`` and ``eps_by_start``) satisfies the rule of the module docstring: at least
     :data:`MIN_REPLICAS` hits, one of them the ensemble's own search."""
     return hits(ground) >= MIN_REPLICAS and own_hits(ground) >= 1
@@ -99,8 +99,8 @@ def is_converged(ground: Mapping[str, Any] | None) -> bool:
 
 def untried_starts(states: Mapping[str, Any], starts: Sequence[str] | None = None) -> list[str]:
     """The starts from which no stored replica of an ensemble started: ``states`` is a
-    :meth:`Store.states` dict (every state's ``starts`` counts) or a row of
-    :meth:`Store.ground_states` (its ``starts_tried`` and ``start_policy``); ``starts`` the
+    :meth:`.Store.states` dict (every state's ``starts`` counts) or a row of
+    :meth:`.Store.ground_states` (its ``starts_tried`` and ``start_policy``); ``starts`` the
     starts asked for —
     by default the knot's default starts where the ensemble is a sweep's (its settings'
     ``start`` policy is :data:`~stiffknots.sweeps.plan.START_POLICY`), none otherwise."""
@@ -123,8 +123,8 @@ def untried_starts(states: Mapping[str, Any], starts: Sequence[str] | None = Non
 
 
 def ensemble_converged(states: Mapping[str, Any], starts: Sequence[str] | None = None) -> bool:
-    """The verdict on a whole ensemble (a :meth:`Store.states` dict or a
-    :meth:`Store.ground_states` row): its ground state satisfies the rule
+    """The verdict on a whole ensemble (a :meth:`.Store.states` dict or a
+    :meth:`.Store.ground_states` row): its ground state satisfies the rule
     (:func:`is_converged`) and every start asked for (:func:`untried_starts`: a sweep's
     ensemble asks for the knot's default starts, the shapes §VII conjectures for it) has had
     a replica — the solver's rule too (:func:`stiffknots.problems.base.verdict`): on 4_1

@@ -84,13 +84,18 @@ def seed_from_tube(store: Store, knots: Sequence[str], models: Sequence[Width],
 
     Parameters
     ----------
-    store : the sweep's store.
-    knots, models : the sweep's knots and models.
-    settings : model name → the settings of its replicas
+    store : Store
+        The sweep's store.
+    knots, models
+        The sweep's knots and models.
+    settings : mapping
+        Model name → the settings of its replicas
         (:func:`~stiffknots.sweeps.plan.sweep_settings`): the seeded row joins the bead
         ensemble with the bead model's settings (the same hash).
-    seed : the sweep's seed (the key's seed).
-    budget : the budget's name (kept under ``extra``).
+    seed : int
+        The sweep's seed (the key's seed).
+    budget : str or None
+        The budget's name (kept under ``extra``).
 
     Returns
     -------

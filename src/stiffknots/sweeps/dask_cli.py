@@ -20,6 +20,8 @@ import sys
 
 
 def main() -> None:
+    """Run Dask's command line with the arguments given, ``distributed`` imported as the
+    module docstring says."""
     os.environ.setdefault("DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD", "fork")
     from stiffknots.sweeps.cluster import import_distributed
 

@@ -88,7 +88,9 @@ class SweepJob:
         The embedding it starts from when it is not its round-robin one (an added replica,
         :func:`favoured_start`); None: round-robin.
     parent : dict or None
-        A continuation leg's parent replica (:mod:`stiffknots.sweeps.legs`).
+        A continuation leg's parent replica (:mod:`stiffknots.sweeps.legs`,
+        :func:`stiffknots.sweeps.legs.leg_job`): its store ``id``, ``replica``, ``search``,
+        ``start``, ``epsilon`` and ``coords``; None for a replica that starts from an embedding.
     """
 
     knot: str
@@ -98,9 +100,6 @@ class SweepJob:
     settings: dict = field(compare=False, hash=False, repr=False)
     key: ReplicaKey = field(compare=False, hash=False, repr=False)
     start: str | None = field(default=None, compare=False, hash=False)
-    #: a continuation leg's parent (:func:`stiffknots.sweeps.legs.leg_job`): its store
-    #: ``id``, ``replica``, ``search``, ``start``, ``epsilon`` and ``coords``; None for a
-    #: replica that starts from an embedding
     parent: dict | None = field(default=None, compare=False, hash=False, repr=False)
 
     @property
@@ -175,10 +174,14 @@ def plan_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget,
 
     Parameters
     ----------
-    knots : catalogue names (:func:`resolve_knots`).
-    models : the models (:func:`~stiffknots.sweeps.models.parse_models`).
-    budget : replicas and moves (:mod:`stiffknots.sweeps.budgets`).
-    seed : the sweep's seed (0 ≤ seed < 2⁶³).
+    knots : sequence of str
+        Catalogue names (:func:`resolve_knots`).
+    models : sequence of Width
+        The models (:func:`~stiffknots.sweeps.models.parse_models`).
+    budget : Budget
+        Replicas and moves (:mod:`stiffknots.sweeps.budgets`).
+    seed : int
+        The sweep's seed (0 ≤ seed < 2⁶³).
     """
     seed = V.seed(seed)
     budget.validate()

@@ -110,20 +110,46 @@ class SweepResult:
 
     Attributes
     ----------
-    knots, models : the sweep's knots (catalogue names) and models.
-    budget : its replicas and moves; seed : its seed.
-    settings_hash : model name → the settings hash of its replicas (their store ensembles).
-    jobs : jobs planned; skipped : stored before the sweep began; ran : finished now;
-    written : rows written now (``ran`` minus those another writer stored first).
-    failed : ``{"job", "error"}`` per job that failed (not stored).
-    interrupted : stopped by Ctrl-C (the rest resumes with the same sweep).
-    wall_seconds : of the whole sweep; cpu_seconds : the finished replicas' CPU time.
-    workers : worker threads of the cluster; scheduler : ``"local"`` or its address.
-    max_replicas : the most replicas a (knot, model) may get; added : replicas planned beyond
-    the budget's for (knot, model)s not converged (counted in ``jobs``); legs : how many of
-    them are continuation legs (:mod:`stiffknots.sweeps.legs`).
-    seeded : the bead replicas seeded from the tube ground and written now
-    (:mod:`stiffknots.sweeps.cross`): ``knot``, ``model``, ``epsilon``, ``tube_epsilon``.
+    knots : list of str
+        The sweep's knots (catalogue names).
+    models : list of Width
+        The sweep's models.
+    budget : ~stiffknots.sweeps.budgets.Budget
+        Its replicas and moves.
+    seed : int
+        Its seed.
+    settings_hash : dict
+        Model name → the settings hash of its replicas (their store ensembles).
+    jobs : int
+        Jobs planned.
+    skipped : int
+        Stored before the sweep began.
+    ran : int
+        Finished now.
+    written : int
+        Rows written now (``ran`` minus those another writer stored first).
+    failed : list of dict
+        ``{"job", "error"}`` per job that failed (not stored).
+    interrupted : bool
+        Stopped by Ctrl-C (the rest resumes with the same sweep).
+    wall_seconds : float
+        Of the whole sweep.
+    cpu_seconds : float
+        The finished replicas' CPU time.
+    workers : int
+        Worker threads of the cluster.
+    scheduler : str
+        ``"local"`` or its address.
+    max_replicas : int
+        The most replicas a (knot, model) may get.
+    added : int
+        Replicas planned beyond the budget's for (knot, model)s not converged (counted in
+        ``jobs``).
+    legs : int
+        How many of them are continuation legs (:mod:`stiffknots.sweeps.legs`).
+    seeded : list of dict
+        The bead replicas seeded from the tube ground and written now
+        (:mod:`stiffknots.sweeps.cross`): ``knot``, ``model``, ``epsilon``, ``tube_epsilon``.
     """
 
     knots: list[str]
@@ -163,6 +189,7 @@ class SweepResult:
         return not self.interrupted and not self.failed and self.ran == self.todo
 
     def to_dict(self) -> dict:
+        """The result as plain data (JSON): the attributes, ``left`` and the widths."""
         return {"knots": self.knots, "models": [m.exclusion for m in self.models],
                 "widths": {m.exclusion: m.as_dict() for m in self.models},
                 "budget": self.budget.as_dict(), "seed": self.seed,

@@ -86,9 +86,9 @@ class ClosedBounds:
     upper : float or None
         ``min(eps_cb, eps_pbl) = 2 pi^2 min(alpha^2 n^2, i^2)``. If only one of ``n``, ``i`` is
         known, the one construction available (still a rigorous upper bound); None if neither.
-    attained_by : {"CB", "PBL"} or None
-        Which configuration gives ``upper``: ``"CB"`` when ``i <= alpha n`` (ties to CB), None
-        unless both ``n`` and ``i`` are known.
+    attained_by : str or None
+        Which configuration gives ``upper`` (``"CB"`` or ``"PBL"``): ``"CB"`` when ``i <= alpha n``
+        (ties to CB), None unless both ``n`` and ``i`` are known.
     eps_cb : float or None
         Circular braid, ``2 pi^2 i^2`` (eq. (30)).
     eps_pbl : float or None
@@ -165,8 +165,8 @@ class OpenBounds:
         ``2 pi^2 n1^2``.
     upper : float or None
         ``2 pi^2 min(alpha^2 n1^2, i1^2)`` (the paper's "alpha n1^2" is a misprint).
-    attained_by : {"CB", "PBL"} or None
-        As for :class:`ClosedBounds`, with ``n1``, ``i1``.
+    attained_by : str or None
+        ``"CB"`` or ``"PBL"``, as for :class:`ClosedBounds`, with ``n1``, ``i1``.
     exact : bool
         ``n1 == i1``: a circle (``i1``-covered) tangent to the straight ends,
         ``mu* = 2 pi^2 i1^2 C / L_e^2`` (the open trefoil: ``2 pi^2 C / L_e^2``).
@@ -231,7 +231,8 @@ class RestrictedCurvatureBounds:
     upper : float or None
         ``2 pi min(7n/3, i) R`` (PBL arc ansatz ``14 pi n R / 3`` or circular braid
         ``2 pi i R``).
-    attained_by : {"CB", "PBL"} or None
+    attained_by : str or None
+        ``"CB"`` or ``"PBL"``, as for :class:`ClosedBounds`.
     l_cb, l_pbl : float or None
         Lengths of the two constructions.
     exact : bool

@@ -613,7 +613,8 @@ def loop_curve(n_points: int = 400, *, with_tangents: bool = False
 
     Returns
     -------
-    (n_points, 2) array, or (points, tangents) if ``with_tangents``.
+    ndarray or tuple
+        (n_points, 2) array, or (points, tangents) if ``with_tangents``.
     """
     if n_points < 3:
         raise ValueError(f"n_points must be >= 3, got {n_points}")
@@ -672,7 +673,8 @@ def eight_curve(n_points: int = 400, *, with_tangents: bool = False, u_start: fl
 
     Returns
     -------
-    (n_points, 2) array, or (points, tangents) if ``with_tangents``.
+    ndarray or tuple
+        (n_points, 2) array, or (points, tangents) if ``with_tangents``.
     """
     if n_points < 4:
         raise ValueError(f"n_points must be >= 4, got {n_points}")
@@ -705,7 +707,8 @@ def eighty_curve(n_points: int = 600, *, split: bool = False
 
     Returns
     -------
-    (n_points, 2) array, or the tuple ``(eight, circle)`` if ``split``.
+    ndarray or tuple
+        (n_points, 2) array, or the tuple ``(eight, circle)`` if ``split``.
     """
     if n_points < 8:
         raise ValueError(f"n_points must be >= 8, got {n_points}")

@@ -1,6 +1,6 @@
 """Precise final minimiser ("polish") of the constrained discrete problem (paper §VII, §VIII).
 
-The Monte Carlo engine ends near a local minimum of the discrete bending energy (§VII)
+The Monte Carlo engine ends near a local minimum of the discrete bending energy (§VII) ::
 
     E_d = Σ_joints (1 − u_n·u_{n+1}),    |u_n| = |r_{n+1} − r_n| = 1        (C = 1)
 

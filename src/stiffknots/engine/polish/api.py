@@ -28,27 +28,40 @@ class PolishResult:
 
     Attributes
     ----------
-    pos : (N, 3) the polished chain (a new array; the input is untouched).
-    energy_before, energy : E_d = Σ (1 − u_n·u_{n+1}) of the input and of ``pos`` (paper §VII;
+    pos : ndarray
+        (N, 3) the polished chain (a new array; the input is untouched).
+    energy_before, energy : float
+        E_d = Σ (1 − u_n·u_{n+1}) of the input and of ``pos`` (paper §VII;
         ε = E_d·N for a closed chain).
-    kkt_residual : min over bond tensions λ and contact forces μ ≥ 0 of ‖∇E − Aᵀ(λ, μ)‖₂ at
+    kkt_residual : float
+        Min over bond tensions λ and contact forces μ ≥ 0 of ‖∇E − Aᵀ(λ, μ)‖₂ at
         ``pos`` (free beads only; A: Jacobian of the bonds and of the contacts within 10⁻⁸ of
         their limit). Zero at a KKT point; see :mod:`stiffknots.engine.polish.sqp`.
-    grad_norm : ‖∇E‖₂ over the free beads (the scale of ``kkt_residual``).
-    iterations : accepted SQP steps.
-    converged : kkt_residual ≤ tol·grad_norm, or no step can lower E by more than its
+    grad_norm : float
+        ‖∇E‖₂ over the free beads (the scale of ``kkt_residual``).
+    iterations : int
+        Accepted SQP steps.
+    converged : bool
+        kkt_residual ≤ tol·grad_norm, or no step can lower E by more than its
         floating-point resolution and kkt_residual ≤ 10⁻⁶·grad_norm.
-    reason : why the iteration stopped.
-    n_active : exclusion constraints within 10⁻⁸ of their limit at the end (bead pairs; in
+    reason : str
+        Why the iteration stopped.
+    n_active : int
+        Exclusion constraints within 10⁻⁸ of their limit at the end (bead pairs; in
         the tube model vertex–vertex, vertex–segment and segment–segment contact pieces).
-    max_bond_error : max_k | |r_{k+1} − r_k| − 1 |.
-    exclusion_margin : min over the exclusion constraints of (distance − limit) (≥ 0; capped
+    max_bond_error : float
+        ``max_k | |r_{k+1} − r_k| − 1 |``.
+    exclusion_margin : float
+        Min over the exclusion constraints of (distance − limit) (≥ 0; capped
         at 1; +inf for ``exclusion="none"``).
-    strand_gap : min distance between segments that share no bead (capped at 1).
-    gap_force : Σ of the multipliers of the strand-gap pieces (the force pressing strands
+    strand_gap : float
+        Min distance between segments that share no bead (capped at 1).
+    gap_force : float
+        Σ of the multipliers of the strand-gap pieces (the force pressing strands
         through each other, C per bond length); the energy exceeds the touching limit
         (min_gap → 0) by ≈ gap_force·min_gap. Zero when no gap piece is active.
-    seconds : wall time.
+    seconds : float
+        Wall time.
     """
 
     pos: np.ndarray
@@ -144,22 +157,31 @@ def polish(
 
     Parameters
     ----------
-    pos : (N, 3) chain with unit bonds (to 10⁻⁸) that satisfies its exclusion rule (to
+    pos
+        (N, 3) chain with unit bonds (to 10⁻⁸) that satisfies its exclusion rule (to
         10⁻¹⁰).
-    closed : closed ring (N bonds, N joints) or open chain (N − 1 bonds, N − 2 joints) with
+    closed : bool
+        Closed ring (N bonds, N joints) or open chain (N − 1 bonds, N − 2 joints) with
         clamped ends (the fixed-extension ensemble of §VIII: beads 0, 1 and N−2, N−1 on the z
         axis, end segments along −z and +z, every other bead strictly between z_0 and
         z_{N−1}; the excess length L_e does not change).
     exclusion : ``"bead"`` (beads at index distance ≥ 2 at least ``d`` apart, §VII),
         ``"tube"`` (segments sharing no bead at least ``w`` apart, §II) or ``"none"``.
-    d, w : exclusion distances (bond lengths).
-    clamp_ends : open chains: beads held fixed at each end (default 2, the end segments).
-    max_iter : largest number of accepted steps.
-    tol : converged when the KKT residual is ≤ tol·‖∇E‖₂ (or, once no decrease of E is
+    d, w : float
+        Exclusion distances (bond lengths).
+    clamp_ends : int or None
+        Open chains: beads held fixed at each end (default 2, the end segments).
+    max_iter : int
+        Largest number of accepted steps.
+    tol : float
+        Converged when the KKT residual is ≤ tol·‖∇E‖₂ (or, once no decrease of E is
         resolvable in floating point, ≤ 10⁻⁶·‖∇E‖₂; see :mod:`stiffknots.engine.polish.sqp`).
-    max_step : largest displacement of any bead in one step (bond lengths).
-    guard : strand-passage guard (default: on for ``bead`` and ``tube``, off for ``none``).
-    min_gap : with the guard on and a rule that does not keep strands apart by itself
+    max_step : float
+        Largest displacement of any bead in one step (bond lengths).
+    guard : bool or None
+        Strand-passage guard (default: on for ``bead`` and ``tube``, off for ``none``).
+    min_gap : float
+        With the guard on and a rule that does not keep strands apart by itself
         (``bead``, ``none``), segments that share no bead are also kept ≥ ``min_gap`` apart.
         The bead rule with d = 1/√2 lets two segments touch (crossing at right angles at their
         midpoints, all four beads exactly d apart) and tight bead-model knots press into that
@@ -168,7 +190,8 @@ def polish(
         energy then lies above that of the touching limit by ≈ ``gap_force``·min_gap (first
         order; ≈ 3e-6 relative on the worst fixture at the default). If the input's strands
         are closer, half their distance is used instead.
-    guard_depth : bisection levels the guard may use to certify a close pair (the guard
+    guard_depth : int
+        Bisection levels the guard may use to certify a close pair (the guard
         rejects what it cannot certify).
 
     Returns

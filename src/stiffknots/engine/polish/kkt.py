@@ -1,12 +1,12 @@
 """The final minimiser's linear algebra: KKT systems, the min-norm projection, Schur updates.
 
 * The base KKT matrix [H Aᵀ; A 0] of a QP step (A: the bonds and the gauge rows) is
-  factorised once by sparse LU (:func:`_factor_kkt`), with a tiny dual regularisation
+  factorised once by sparse LU (``_factor_kkt()``), with a tiny dual regularisation
   [H Aᵀ; A −reg·I] when it is singular (dependent constraints); SuperLU's diagnostics on an
-  exactly singular matrix are held back (:func:`_superlu_diagnostics_held`).
+  exactly singular matrix are held back (``_superlu_diagnostics_held()``).
 * Working-set changes go through a bordered inverse of the Schur complement J_W K⁻¹ J_Wᵀ
-  (:class:`_SchurInverse`).
-* The projection's min-norm correction dx = Aᵀ(AAᵀ)⁻¹r (:class:`_MinNormSolver`): the Gram
+  (``_SchurInverse``).
+* The projection's min-norm correction dx = Aᵀ(AAᵀ)⁻¹r (``_MinNormSolver``): the Gram
   matrix AAᵀ is assembled bead by bead in a compiled kernel and factorised by dense Cholesky
   (sparse LU for long chains).
 """

@@ -1,7 +1,7 @@
 """Constraint pieces of the final minimiser: the exclusion rule as smooth inequalities.
 
 Every exclusion constraint is a *piece*: the vector v = Σ_i w_i r_i between two closest points
-(barycentric weights on at most four beads) with g = |v|² − T² ≥ 0, T = limit + τ, τ = 10⁻¹³
+(barycentric weights on at most four beads) with ``g = |v|² − T² ≥ 0``, T = limit + τ, τ = 10⁻¹³
 (so the final margin is ≥ 0 in floating point). ``bead`` pieces are bead pairs (the rule of
 §VII). In the ``tube`` model (§II) the segment distance is split into vertex–vertex,
 vertex–segment and (both closest points interior) segment–segment pieces; their minimum is
@@ -20,7 +20,7 @@ whose multipliers are the forces that press the strands through each other); the
 exceeds the touching limit by ≈ ``gap_force``·min_gap.
 
 The candidates (every piece within a margin of its limit) come from an O(N²) compiled scan;
-:func:`_min_clearance` measures the rule on all pairs, independently of the candidates.
+``_min_clearance()`` measures the rule on all pairs, independently of the candidates.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 Written with the raw bond vectors b_n = r_{n+1} − r_n, E = Σ (1 − b_n·b_{n+1}) equals the
 discrete bending energy E_d of §VII on the unit-bond manifold and is a quadratic form in the
-positions; the bonds are c_k = |b_k|² − 1 = 0, and the exclusion rule is a set of inequality
-pieces (:mod:`stiffknots.engine.polish.pieces`). :class:`_Problem` maps the free beads (an
+positions; the bonds are ``c_k = |b_k|² − 1 = 0``, and the exclusion rule is a set of inequality
+pieces (:mod:`stiffknots.engine.polish.pieces`). ``_Problem`` maps the free beads (an
 open chain's clamped ends drop out) to coordinates interleaved x, y, z, gathers the candidate
 pieces, and assembles the Jacobian of the bonds, the gauge rows and the pieces, and the exact
 Hessian of the Lagrangian, as sparse matrices.

@@ -17,7 +17,7 @@ One iteration, from an admissible x:
    tried as a negative-curvature step.
 3. *Projection*: the trial x + α·dx goes back onto the bonds (to ~10⁻¹³) and the violated
    pieces (to their target) by min-norm Gauss–Newton corrections (chord iterations):
-   dx = Aᵀ(AAᵀ)⁻¹r (:class:`~stiffknots.engine.polish.kkt._MinNormSolver`).
+   dx = Aᵀ(AAᵀ)⁻¹r (``_MinNormSolver``).
 4. *Acceptance*: the exclusion rule on *all* pairs (an O(N²) check, independent of the
    candidates), the strand gap, no energy increase (Armijo where resolvable in floating
    point) and the passage guard (:mod:`stiffknots.engine.guard`); otherwise α is halved.
@@ -31,7 +31,7 @@ the part of the energy gradient that no combination of bond tensions and pushing
 forces balances; it vanishes exactly at a KKT point (away from contacts it is the gradient
 projected on the tangent space of the bond manifold). The run has converged when
 kkt_residual ≤ tol·‖∇E‖₂, or when the exact model predicts no decrease that E can resolve
-(|ΔE| < 10⁻¹³·E) and kkt_residual ≤ 10⁻⁶·‖∇E‖₂.
+(``|ΔE| < 10⁻¹³·E``) and kkt_residual ≤ 10⁻⁶·‖∇E‖₂.
 
 With ``exclusion="none"`` the chain may self-intersect (e.g. an m-covered circle), so the guard
 is off by default there (``guard=None``); pass ``guard=True`` to keep it.
@@ -60,7 +60,7 @@ log = logging.getLogger(__name__)
 
 ACTIVE_TOL = 1e-8  # a contact within this distance of its limit counts as active
 BOND_TOL_OUT = 1e-13  # the projection stops when every bond is unit to this
-#: the stall test of :meth:`_Polisher.run`: over the last STALL_STEPS accepted steps E fell by
+#: the stall test of ``_Polisher.run()``: over the last STALL_STEPS accepted steps E fell by
 #: ≤ STALL_REL·E while the KKT residual is ≤ STALL_KKT·‖∇E‖ — converged: the energy settles
 #: long before the residual reaches ``tol`` (docs/methods/minimiser.md)
 STALL_STEPS = 8

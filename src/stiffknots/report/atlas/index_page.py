@@ -37,6 +37,8 @@ def _per_model_cell(knot: KnotRow, models: list[tuple[str, str]], render, sort_v
 def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str | None,
                families: dict | None, title: str, meta: dict, thumbs: dict,
                fig: dict) -> str:
+    """The HTML of ``index.html``: the table of the knots, ε against n² and the family
+    statistics (module :mod:`stiffknots.report.atlas`)."""
     extra: dict = {}
     body_model = dict(models).get(default, "") if default else ""
     parts = [page_head(title, "", _model_css(models)),

@@ -20,6 +20,8 @@ def _count_text(st: StateRow, replicas: int | None) -> str:
 
 def knot_page(k: KnotRow, models: list[tuple[str, str]], default: str | None, title: str,
               prev: KnotRow | None, nxt: KnotRow | None) -> str:
+    """The HTML of ``knots/<name>.html``: one knot's data and the 3D view of each of its
+    states, with links to the previous and the next knot."""
     extra: dict = {}
     parts = [page_head(f"{k.name} — {title}", "../", ""), "<body>\n<main>\n"]
     nav = ['<a href="../index.html">← all knots</a>']

@@ -310,6 +310,8 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> StateRow:
 
 
 def parse_knots(knots: Sequence[Mapping]) -> list[KnotRow]:
+    """The knots of the input schema (module docstring), checked, as :class:`KnotRow`;
+    ValueError names the first field that is wrong."""
     if isinstance(knots, Mapping) or not isinstance(knots, Sequence):
         raise ValueError("knots must be a list of dicts, one per knot")
     out: list[KnotRow] = []

@@ -89,6 +89,8 @@ def _bunch_balance(lv: LevelSolution) -> dict[str, float]:
 
 
 def common_details(res: StructureResult) -> dict[str, Any]:
+    """What every solved structure reports: the Richardson table and errors, the solver's
+    effort, each arc's length and energy, the tension and the force balance."""
     lv = res.best
     arcs = res.structure.arcs
     E_p = lv.problem.arc_energies(lv.x)
@@ -121,6 +123,8 @@ def common_details(res: StructureResult) -> dict[str, Any]:
 
 
 def cage_details(res: StructureResult) -> dict[str, Any]:
+    """The 4-fold cage's geometry: ``AB``, the angles of its axes, the arcs' distances and
+    azimuths about ``AB``, and the sphere they lie near."""
     lv = res.best
     prob = lv.problem
     A = prob.node(lv.x, 0)
@@ -179,6 +183,8 @@ def _sphere_fit(P: np.ndarray) -> dict[str, float]:
 
 
 def eighty_details(res: StructureResult) -> dict[str, Any]:
+    """The 80's geometry: the length fractions of its circle and its 8, the circle's radius,
+    the forces on them and how far the curve leaves a plane."""
     lv = res.best
     ell = lv.lengths
     l8 = float(ell[0] + ell[1] + ell[2])

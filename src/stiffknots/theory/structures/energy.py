@@ -2,7 +2,7 @@
 4-fold cage with its axes held at a given angle (:func:`cage_axis_scan`).
 
 Results (:func:`structure_energy`, ``K`` up to 256 per unit weight, 512 for the cage)
-------------------------------------------------------------------------------------
+-------------------------------------------------------------------------------------
 * ``CB(i)``: ``2 pi^2 i^2`` to ``1e-13`` relative (the discrete minimiser is the regular
   polygon).
 * ``80``: ``142.58436822078`` (formula: ``142.584368220781``), error estimate ``2e-10``; circle

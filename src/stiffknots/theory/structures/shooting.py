@@ -37,7 +37,7 @@ def cage_shooting(level: LevelSolution | None = None) -> dict[str, Any]:
     ----------
     level : LevelSolution, optional
         A discrete cage solution whose end curvature and force start the root search
-        (default: the finest level of :func:`structure_energy` ``("4C")``'s solve, recomputed).
+        (default: the finest level of :func:`.structure_energy` ``("4C")``'s solve, recomputed).
 
     Returns
     -------

@@ -16,7 +16,7 @@ angles are forbidden, §V B "Structure"). The curve is inextensible: the tangent
 vector at every node and the arc length is ``K_p h_p``; positions are the trapezoidal integral
 of the tangent field, ``r_end - r_start = h_p [t_0/2 + t_1 + ... + t_{K_p-1} + t_{K_p}/2]``
 (three closure constraints per arc, the junction positions being unknowns), and the energy of
-the arc is
+the arc is ::
 
     E_p = m_p (C / h_p) sum_j (1 - t_j . t_{j+1}) = m_p (C / 2 h_p) sum_j |t_{j+1} - t_j|^2,
 
@@ -86,8 +86,9 @@ class ArcSpec:
         ``m_p``: strands in the line-braid (energy ``m_p C/2 int kappa^2``, length ``m_p l_p``).
     weight : int
         Resolution weight: the arc has ``weight * K`` intervals at level ``K``.
-    guess : (M, 3) array
-        A rough starting curve from the start node to the end node (any length, any sampling).
+    guess : ndarray
+        Shape ``(M, 3)``: a rough starting curve from the start node to the end node (any length,
+        any sampling).
     """
 
     name: str
@@ -113,10 +114,11 @@ class StructureProblem:
         Short name and one-line description.
     node_names : tuple of str
         Junction labels (``"P (point-braid)"``, ``"X (double point)"``...).
-    node_guess : (n_nodes, 3) array
-        Starting junction positions.
-    dir_guess : (n_dirs, 3) array
-        Starting directions (bunch axes, strand tangents at multiple points); normalised.
+    node_guess : ndarray
+        Shape ``(n_nodes, 3)``: starting junction positions.
+    dir_guess : ndarray
+        Shape ``(n_dirs, 3)``: starting directions (bunch axes, strand tangents at multiple points);
+        normalised.
     arcs : tuple of ArcSpec
     fixed_nodes : tuple of int
         Junctions held at their starting position (translation gauge).
@@ -553,8 +555,9 @@ def richardson(values: Sequence[float], ratio: float = 2.0, orders: int | None =
 
     Returns
     -------
-    (n, k+1) array ``R`` with ``R[j, k]`` the value with ``K^-2, ..., K^-2k`` removed using
-    levels ``j-k .. j`` (``nan`` where undefined).
+    ndarray
+        (n, k+1) array ``R`` with ``R[j, k]`` the value with ``K^-2, ..., K^-2k`` removed
+        using levels ``j-k .. j`` (``nan`` where undefined).
     """
     v = np.asarray(values, dtype=float)
     n = len(v)
