@@ -286,6 +286,7 @@ def plot_eps_vs_n2(points, ax=None, *, bounds: bool = True, labels: bool = True,
     Returns
     -------
     matplotlib Axes
+        The axes, ε against n² with the bounds' band.
 
     Raises
     ------
@@ -380,6 +381,7 @@ def plot_tension(points, ax=None, *, bounds: bool = True, labels: bool = True,
     Returns
     -------
     matplotlib Axes
+        The axes, μ against 1/L_e² with the bounds' lines.
 
     Raises
     ------

@@ -674,7 +674,7 @@ def eight_curve(n_points: int = 400, *, with_tangents: bool = False, u_start: fl
     Returns
     -------
     ndarray or tuple
-        (n_points, 2) array, or (points, tangents) if ``with_tangents``.
+        The 8's (n_points, 2) points, or (points, tangents) if ``with_tangents``.
     """
     if n_points < 4:
         raise ValueError(f"n_points must be >= 4, got {n_points}")
