@@ -546,3 +546,38 @@ def test_resume_check_happens_before_any_work(tmp_path, monkeypatch):
     save_checkpoint(ck / "replica_1.ckpt.npz", {"pos": np.zeros((3, 3))}, meta)
     with pytest.raises(CheckpointError, match="different run .*seed differs"):
         base.solve(problem)
+
+
+# ==============================================================================================
+# #40: full disks, read-only stores, singular/extreme/BOM curves, huge files, threads,
+# concurrent --out, mirror names. Each case ends in one clear line (an ``error:`` line where it
+# fails) and loses nothing.
+# ==============================================================================================
+
+
+def _cli(*args, cwd=None, timeout=300, **kw) -> subprocess.CompletedProcess:
+    return subprocess.run([*CLI, *map(str, args)], cwd=cwd, capture_output=True, text=True,
+                          timeout=timeout, **kw)
+
+
+def _one_error_line(p: subprocess.CompletedProcess, pattern: str, codes=(1, 2)) -> str:
+    """The command failed with one ``error:`` line on stderr matching ``pattern``."""
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode in codes, (p.returncode, p.stderr[-3000:])
+    assert "Traceback" not in p.stderr, p.stderr[-3000:]
+    assert len(lines) == 1, p.stderr[-3000:]
+    assert lines[0].startswith("error:"), lines[0]
+    assert re.search(pattern, lines[0]), lines[0]
+    return lines[0]
+
+
+# --- mirror names (row 13) --------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["3_1*", "m3_1", "3_1m"])
+def test_mirror_names_are_read_as_the_knot_and_said(name):
+    p = _cli("knot", name)
+    assert p.returncode == 0, p.stderr
+    text = " ".join(p.stdout.split())
+    assert "knot 3_1" in text
+    assert "mirror image of 3_1" in text and "do not depend on the mirror" in text

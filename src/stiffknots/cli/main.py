@@ -90,6 +90,27 @@ def _note_cold_cache() -> None:
                          "`stiffknots warmup` does it ahead) ...")
 
 
+#: commands whose first argument is a knot name
+_KNOT_COMMANDS = {"anneal", "open", "tightest", "thin-limit"}
+
+
+def _note_mirror() -> None:
+    """A knot named by its mirror image (``anneal m3_1``) is run as the catalogue's knot: say
+    so when the work starts (a misspelt name stays a one-line error)."""
+    args = [a for a in sys.argv[1:] if not a.startswith("-")]
+    if len(args) < 2 or args[0] not in _KNOT_COMMANDS:
+        return
+    from stiffknots.errors import UnknownKnotError
+    from stiffknots.knots.catalogue import mirror_note
+
+    try:
+        note = mirror_note(args[1])
+    except UnknownKnotError:
+        return  # the command says it
+    if note:
+        work_starts_note(note)
+
+
 def _json_stdout_only() -> None:
     """With --json, standard output carries the JSON document and nothing else: file
     descriptor 1 is pointed at standard error for the whole command — compiled libraries
@@ -142,6 +163,7 @@ def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
     _sigterm_as_interrupt()
     _note_cold_cache()
+    _note_mirror()
     _json_stdout_only()
     try:
         _main()
