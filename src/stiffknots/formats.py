@@ -126,8 +126,10 @@ def _fmt(v: float) -> str:
 
 
 def _read_text(path: PathLike) -> str:
+    # utf-8-sig: a byte-order mark (Notepad, Excel) is not text; read as a character it
+    # turned the first vertex line into a header, dropping that vertex
     try:
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8-sig") as fh:
             return fh.read()
     except FileNotFoundError:
         raise ChainFormatError(f"{path}: no such file") from None

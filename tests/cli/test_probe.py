@@ -581,3 +581,17 @@ def test_mirror_names_are_read_as_the_knot_and_said(name):
     text = " ".join(p.stdout.split())
     assert "knot 3_1" in text
     assert "mirror image of 3_1" in text and "do not depend on the mirror" in text
+
+
+# --- singular, extreme and BOM curves (rows 6, 7, 8, 12) --------------------------------------
+
+
+def test_a_byte_order_mark_keeps_every_vertex(tmp_path):
+    x = np.loadtxt(DATA / "3.1.vect", skiprows=5, max_rows=46)  # the trefoil of ridgerunner
+    (tmp_path / "plain.txt").write_text("\n".join(" ".join(map(str, p)) for p in x) + "\n")
+    (tmp_path / "bom.txt").write_bytes(b"\xef\xbb\xbf" + (tmp_path / "plain.txt").read_bytes())
+    import json
+
+    beads = [json.loads(_cli("identify", tmp_path / f, "--json").stdout)["beads"]
+             for f in ("plain.txt", "bom.txt")]
+    assert beads == [46, 46]
