@@ -595,3 +595,43 @@ def test_a_byte_order_mark_keeps_every_vertex(tmp_path):
     beads = [json.loads(_cli("identify", tmp_path / f, "--json").stdout)["beads"]
              for f in ("plain.txt", "bom.txt")]
     assert beads == [46, 46]
+
+
+def _ridgerunner_trefoil() -> np.ndarray:
+    return np.loadtxt(DATA / "3.1.vect", skiprows=5, max_rows=46)
+
+
+def _write_curve(path: Path, x: np.ndarray) -> Path:
+    path.write_text("\n".join(" ".join(repr(float(v)) for v in p) for p in x) + "\n")
+    return path
+
+
+@pytest.mark.parametrize(("command", "case"), [("identify", "flattened"), ("identify", "bowtie"),
+                                               ("resample", "bowtie"), ("relax", "flattened")])
+def test_a_singular_curve_is_refused_naming_the_curve(tmp_path, case, command):
+    """Rows 6 and 12: a polygon whose edges cross has no knot type: identify named it 0_1,
+    resample and relax blamed --beads."""
+    x = _ridgerunner_trefoil()
+    x[:, 2] = 0.0
+    if case == "bowtie":
+        x = np.array([[0, 0, 0], [1, 1, 0], [1, 0, 0], [0, 1, 0.0]])
+    f = _write_curve(tmp_path / f"{case}.txt", x)
+    extra = [tmp_path / "out.xyz"] if command == "resample" else []
+    p = _cli(command, f, *extra, cwd=tmp_path)
+    line = _one_error_line(p, r"the curve meets itself \(its edges \d+ and \d+.*no knot type",
+                           codes=(2,))
+    assert "--beads" not in line
+    assert sorted(q.name for q in tmp_path.iterdir()) == [f.name]
+
+
+def test_a_trefoil_at_1e300_is_a_trefoil(tmp_path):
+    """Row 7: scaled by 1e300 it was named 0_1 (an overflow in the crossing tests)."""
+    import json
+
+    f = _write_curve(tmp_path / "big.txt", _ridgerunner_trefoil() * 1e300)
+    p = _cli("identify", f, "--json")
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+    d = json.loads(p.stdout)
+    assert d["knot"] == "3_1"
+    assert d["input_epsilon"] == pytest.approx(115.6535, abs=1e-4)
+    assert 1e300 < d["bond_length_range"][0] < d["bond_length_range"][1] < 1e301

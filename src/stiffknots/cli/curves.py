@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.table import Table
 
@@ -38,7 +39,15 @@ def _identify(chain) -> dict:
         raise UserError(f"cannot identify the knot: {exc}") from None
     except ValueError as exc:  # a polygon that meets itself
         raise UserError(f"cannot identify the knot: {exc}") from None
-    b = chain.bond_lengths()
+    from stiffknots.chain import Chain
+    from stiffknots.knots.singular import rescaled
+
+    # lengths and ε measured at order 1 (exact powers of two: ε is scale invariant, 1e300
+    # coordinates overflowed to inf and nan)
+    scaled = Chain(rescaled(chain.coords), chain.closed)
+    big = float(np.max(np.abs(chain.coords)))
+    factor = big / float(np.max(np.abs(scaled.coords))) if big else 1.0
+    b = scaled.bond_lengths() * factor
     d = {
         "file": str(chain.meta.get("source", "")),
         "knot": r.name,
@@ -47,9 +56,9 @@ def _identify(chain) -> dict:
         "closure": closure_note(chain),
         "closed": chain.closed,
         "beads": chain.n_beads,
-        "length": chain.length,
+        "length": scaled.length * factor,
         "bond_length_range": [float(b.min()), float(b.max())],
-        "input_epsilon": chain.epsilon(),
+        "input_epsilon": scaled.epsilon(),
         **{k: v for k, v in r.as_dict().items() if k not in ("knot", "candidates", "chirality")},
     }
     if r.name is not None and "#" not in r.name:

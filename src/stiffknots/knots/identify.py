@@ -603,13 +603,17 @@ def identify_details(coords, closed: bool = True) -> KnotNaming:
     IdentificationError
         If the HOMFLY-PT polynomial cannot be computed (far too many crossings).
     ValueError
-        If the polygon meets itself (no knot type).
+        If the polygon meets itself (no knot type):
+        :class:`~stiffknots.knots.singular.SingularCurveError`.
     """
     from stiffknots.knots import exterior as ex
+    from stiffknots.knots.singular import refuse_singular, rescaled
 
-    x = np.asarray(coords, dtype=np.float64)
+    # a knot type is scale invariant, floating point is not: 1e300 overflowed to 0_1
+    x = rescaled(np.asarray(coords, dtype=np.float64))
     if not closed:
         x = close_open_chain_along_z(x)
+    refuse_singular(x)  # its projection would resolve the crossing either way
     homfly = identify(x, closed=True)
     steps = ["HOMFLY-PT polynomial (topoly)"]
     if homfly == "unknown":

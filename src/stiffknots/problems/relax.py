@@ -75,6 +75,7 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
     """
     from stiffknots.knots.identify import identify_details, normalize_name
     from stiffknots.knots.resample import resample
+    from stiffknots.knots.singular import refuse_singular
 
     if not chain.closed:
         raise UserInputError("relax takes a closed curve (a knot); for an open knot under "
@@ -92,6 +93,7 @@ def prepare_curve(chain: Chain, beads: int, exclusion: str, w_over_L: float | No
                                    f"the tube must be thinner than a bond at N = {beads}")
     if knot is not None:
         knot = _knot_name(knot)
+    refuse_singular(chain.coords, source=chain.meta.get("source"))  # the curve is at fault
     naming = identify_details(chain.coords, closed=True).as_dict()
     name = naming.get("knot")
     if knot is not None:
