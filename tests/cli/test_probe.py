@@ -635,3 +635,52 @@ def test_a_trefoil_at_1e300_is_a_trefoil(tmp_path):
     assert d["knot"] == "3_1"
     assert d["input_epsilon"] == pytest.approx(115.6535, abs=1e-4)
     assert 1e300 < d["bond_length_range"][0] < d["bond_length_range"][1] < 1e301
+
+
+# --- huge curve files (row 9) -----------------------------------------------------------------
+
+
+def test_a_curve_beyond_the_limit_is_refused_at_once(tmp_path):
+    """Row 9: 10⁵–10⁶ vertices ran for minutes to hours in topoly, 800 MB, deaf to SIGTERM."""
+    from stiffknots.cli.curves import MAX_VERTICES
+
+    t = np.linspace(0, 2 * np.pi, MAX_VERTICES + 1, endpoint=False)
+    f = _write_curve(tmp_path / "huge.txt", np.column_stack(
+        [(2 + np.cos(3 * t)) * np.cos(2 * t), (2 + np.cos(3 * t)) * np.sin(2 * t),
+         np.sin(3 * t)]))
+    for args in (["identify", f], ["resample", f, tmp_path / "r.xyz"]):
+        p = _cli(*args, cwd=tmp_path, timeout=60)
+        _one_error_line(p, r"huge\.txt: 20,001 vertices; .* at most 20,000", codes=(2,))
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["huge.txt"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_long_identification_says_so_and_stops_at_sigterm(tmp_path):
+    """Row 9: a polygon of thousands of vertices says that the invariants take time, and
+    ``kill PID`` stops it within seconds (it waited for topoly's compiled code), the forked
+    child that computes included."""
+    import signal
+    import time
+
+    t = np.linspace(0, 2 * np.pi, 12_000, endpoint=False)
+    f = _write_curve(tmp_path / "long.txt", np.column_stack(
+        [(2 + np.cos(3 * t)) * np.cos(2 * t), (2 + np.cos(3 * t)) * np.sin(2 * t),
+         np.sin(3 * t)]))
+    p = subprocess.Popen([*CLI, "identify", str(f)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    first = p.stderr.readline()  # waits for the line (before the fix: the run's end)
+    assert "12,000 vertices: computing the knot invariants" in first, first
+    time.sleep(2)
+    assert p.poll() is None
+    children = subprocess.run(["pgrep", "-P", str(p.pid)], capture_output=True,
+                              text=True).stdout.split()
+    t0 = time.monotonic()
+    p.send_signal(signal.SIGTERM)
+    rc = p.wait(timeout=60)
+    assert time.monotonic() - t0 < 5
+    rest = p.stderr.read()
+    assert rc == 143, rest
+    assert "Traceback" not in rest and rest.strip() == "interrupted", rest
+    for pid in children:  # the child computing the invariants is gone
+        assert not Path(f"/proc/{pid}").exists() or "zombie" in Path(
+            f"/proc/{pid}/status").read_text()

@@ -61,6 +61,11 @@ table, which matches KnotInfo's for some knots and not for others (measured in t
 
 Open chains (paper §VIII, straight tails along z) are closed by
 :func:`close_open_chain_along_z` before identification.
+
+A polygon of :data:`CHILD_FROM` vertices or more is identified in a forked child process:
+topoly's compiled reduction takes seconds to minutes there, and a signal that arrives while
+compiled code runs waits for it; the caller waits for the child instead, and Ctrl-C or
+``kill PID`` stop it at once (the child is killed).
 """
 
 from __future__ import annotations
@@ -95,6 +100,14 @@ __all__ = [
 # exponentially with the crossings of the reduced diagram
 _MAX_CROSS = 60
 _LOCK = threading.Lock()
+
+#: from this many vertices the invariants are computed in a forked child (module docstring)
+CHILD_FROM = 2_000
+_IN_CHILD = [False]  # True in such a child: it computes in place
+
+
+def _big(x) -> bool:
+    return len(x) >= CHILD_FROM and hasattr(os, "fork") and not _IN_CHILD[0]
 
 
 # --------------------------------------------------------------------------------------------
@@ -304,7 +317,7 @@ def homfly_code(
     socket takes that number — the next call then closes a live connection (seen as "Bad file
     descriptor" in the worker's heartbeats). :func:`_keep_stdin` alone cannot close that race.
     """
-    if _threaded():
+    if _threaded() or _big(coords):
         return _in_child(lambda: _homfly_code(coords, closed, max_cross=max_cross,
                                               n_directions=n_directions))
     return _homfly_code(coords, closed, max_cross=max_cross, n_directions=n_directions)
@@ -323,6 +336,7 @@ def _in_child(fn):
     pid = os.fork()
     if pid == 0:  # pragma: no cover (the child)
         code = 0
+        _IN_CHILD[0] = True
         try:
             os.close(r)
             try:
@@ -342,10 +356,17 @@ def _in_child(fn):
             os._exit(code)
     os.close(w)
     chunks = []
-    with os.fdopen(r, "rb") as f:
-        while chunk := f.read(1 << 16):
-            chunks.append(chunk)
-    _, status = os.waitpid(pid, 0)
+    try:
+        with os.fdopen(r, "rb") as f:
+            while chunk := f.read(1 << 16):
+                chunks.append(chunk)
+        _, status = os.waitpid(pid, 0)
+    except BaseException:  # Ctrl-C, kill PID (KeyboardInterrupt): the child stops too
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+        with contextlib.suppress(OSError):
+            os.waitpid(pid, 0)
+        raise
     if not chunks:
         raise IdentificationError(
             f"the HOMFLY-PT computation died (child status {status}): topoly crashed")
@@ -614,6 +635,8 @@ def identify_details(coords, closed: bool = True) -> KnotNaming:
     if not closed:
         x = close_open_chain_along_z(x)
     refuse_singular(x)  # its projection would resolve the crossing either way
+    if _big(x):  # minutes of compiled code: in a child, the caller stays stoppable
+        return _in_child(lambda: identify_details(x, closed=True))
     homfly = identify(x, closed=True)
     steps = ["HOMFLY-PT polynomial (topoly)"]
     if homfly == "unknown":
