@@ -355,3 +355,23 @@ def test_the_langevin_schedule_is_refused_for_the_tube_model():
 
     with pytest.raises(InvalidParameter, match="bead rule"):
         anneal("3_1", schedule=Schedule(kind="langevin"), params=MoveParams(exclusion="tube"))
+
+
+def test_save_refuses_a_folder_holding_another_runs_results(tmp_path):
+    """#40 row 15: ``result.save(folder)`` wrote into another run's results without asking,
+    where the command line refuses its --out (unless --overwrite)."""
+    from stiffknots.errors import UserInputError
+    from stiffknots.problems.base import ReplicaSet
+
+    res = ReplicaSet("3_1", 150, 0, {}, [], 0.0)
+    res.save(tmp_path / "a")  # a new folder
+    before = (tmp_path / "a" / "result.json").read_bytes()
+    with pytest.raises(UserInputError, match=r"a holds the results of another run "
+                                             r"\(result\.json\); choose another folder or "
+                                             r"pass overwrite=True"):
+        res.save(tmp_path / "a")
+    assert (tmp_path / "a" / "result.json").read_bytes() == before
+    res.save(tmp_path / "a", overwrite=True)
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "notes.txt").write_text("mine\n")  # files of no run: fine
+    assert res.save(tmp_path / "b")["result"] == tmp_path / "b" / "result.json"

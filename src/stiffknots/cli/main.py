@@ -4,6 +4,7 @@ code 2, Ctrl-C → exit 130, ``kill PID`` (SIGTERM) → the same stop as Ctrl-C 
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import sys
@@ -30,6 +31,9 @@ from stiffknots.cli.app import (
     work_starts_note,
 )
 from stiffknots.errors import InvalidParameter, UserInputError, WorkerError
+
+#: errors of the machine's storage (not of stiffknots): one line and exit code 1
+_STORAGE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG, errno.EIO}
 
 # the commands, in the order `stiffknots --help` lists them
 for _name, _command in (
@@ -194,6 +198,12 @@ def _main() -> None:
     except (typer.Abort, KeyboardInterrupt):
         _say("interrupted")
         raise SystemExit(130) from None
+    except OSError as e:  # a full disk, a read-only medium met while writing the results
+        if e.errno not in _STORAGE_ERRNOS:
+            raise
+        why = e.strerror or os.strerror(e.errno)
+        _say(f"error: cannot write {e.filename or 'the results'}: {why[:1].lower()}{why[1:]}")
+        raise SystemExit(1) from None
     except Exception as e:  # click usage errors (typer vendors click: no import of it here)
         if callable(getattr(e, "show", None)) and isinstance(getattr(e, "exit_code", None), int):
             if type(e).__name__ == "NoArgsIsHelpError" or not callable(

@@ -54,7 +54,7 @@ from stiffknots.engine.driver import (
 )
 from stiffknots.engine.langevin import run_langevin_replica
 from stiffknots.engine.tempering import run_tempering
-from stiffknots.errors import TopologyChangedError
+from stiffknots.errors import TopologyChangedError, UserInputError
 from stiffknots.fileio import write_bytes, write_json
 from stiffknots.formats import save
 from stiffknots.problems import validate as V
@@ -345,12 +345,25 @@ class ReplicaSet:
                 "replica": r.replica, "epsilon": r.epsilon, "version": self.version,
                 "settings": self.settings}
 
-    def save(self, out: str | Path) -> dict[str, Path]:
+    def save(self, out: str | Path, overwrite: bool = False) -> dict[str, Path]:
         """Write ``best.xyz``/``best.json``, ``replica_K.xyz`` for every replica,
-        ``traces.npz`` and, last, ``result.json`` into ``out`` (each file atomically)."""
+        ``traces.npz`` and, last, ``result.json`` into ``out`` (each file atomically).
+
+        A folder that holds another run's results (any of these names) is refused — a
+        :class:`~stiffknots.errors.UserInputError`, as the command line refuses its
+        ``--out`` — unless ``overwrite``: the files of the same names are then replaced (a
+        ``replica_K.xyz`` of a larger earlier run stays)."""
+        import fnmatch
         import io
+        import os
 
         out = Path(out)
+        if not overwrite and out.is_dir():
+            old = sorted(n for n in os.listdir(out) if n in _RESULT_NAMES
+                         or fnmatch.fnmatchcase(n, "replica_*.xyz"))
+            if old:
+                raise UserInputError(f"{out} holds the results of another run ({old[0]}); "
+                                     "choose another folder or pass overwrite=True")
         out.mkdir(parents=True, exist_ok=True)
         paths: dict[str, Path] = {}
         for r in self.replicas:
@@ -368,6 +381,10 @@ class ReplicaSet:
             paths["traces"] = write_bytes(out / "traces.npz", buf.getvalue())
         paths["result"] = write_json(out / "result.json", self.to_dict())
         return paths
+
+
+#: what :meth:`ReplicaSet.save` writes besides ``replica_K.xyz``
+_RESULT_NAMES = ("result.json", "best.xyz", "best.json", "traces.npz")
 
 
 class Problem:
