@@ -684,3 +684,173 @@ def test_a_long_identification_says_so_and_stops_at_sigterm(tmp_path):
     for pid in children:  # the child computing the invariants is gone
         assert not Path(f"/proc/{pid}").exists() or "zombie" in Path(
             f"/proc/{pid}/status").read_text()
+
+
+# --- read-only stores (rows 2, 3, 14) ---------------------------------------------------------
+
+
+def _results_db(path: Path) -> Path:
+    """A results database with one 5_2 replica (written through the API)."""
+    from stiffknots.store import Store
+
+    row = {"knot": "5_2", "exclusion": "bead", "beads": 150, "thickness": 2 ** -0.5,
+           "seed": 0, "replica": 0, "settings": {"problem": "anneal", "moves": 1000},
+           "epsilon": 128.4, "min_segment_distance": 0.72, "wall_seconds": 1.0,
+           "shape": "4C", "start": "cage"}
+    with Store(path) as s:
+        s.put(row, np.random.default_rng(0).normal(size=(150, 3)))
+    return path
+
+
+def test_a_query_reads_a_database_on_a_read_only_mount(small_fs, tmp_path):
+    """Row 3: 'is not a usable SQLite database' for a good file on a read-only mount."""
+    fs = small_fs("4m")
+    db = _results_db(fs / "r.db")
+    small_fs.readonly(fs)
+    p = _cli("db", "--db", db, "states", "5_2", cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert "5_2" in p.stdout and "128.4" in p.stdout
+
+
+def test_a_query_of_an_empty_file_writes_nothing_into_it(tmp_path):
+    """Row 14: the query wrote the schema into a 0-byte --db."""
+    (tmp_path / "empty.db").write_bytes(b"")
+    for args in (["states", "3_1"], ["grounds"]):
+        p = _cli("db", "--db", tmp_path / "empty.db", *args, cwd=tmp_path)
+        _one_error_line(p, r"empty\.db is empty: no results database yet", codes=(2,))
+    assert [(q.name, q.stat().st_size) for q in tmp_path.iterdir()] == [("empty.db", 0)]
+
+
+def test_atlas_refuses_a_database_it_cannot_write_before_any_work(immutable, tmp_path):
+    """Row 2: the pre-flight looked at the folder only (a read-only mount was refused, an
+    immutable file in a writable folder not); the first replica computed was lost with a
+    traceback ('attempt to write a readonly database')."""
+    db = immutable(_results_db(tmp_path / "r.db"))
+    before = db.read_bytes()
+    p = _cli("atlas", "--knots", "3_1", "--budget", "tiny", "--db", db, "--out",
+             tmp_path / "atlas", cwd=tmp_path)
+    _one_error_line(p, r"--db .*r\.db: cannot write it \(Operation not permitted\)",
+                    codes=(2,))
+    assert db.read_bytes() == before
+    assert not (tmp_path / "atlas").exists()
+
+
+# --- a full disk, Ctrl-C and --overwrite (rows 1, 4) ----------------------------------------
+
+
+def _ends_in_one_error_line(p: subprocess.CompletedProcess, pattern: str, codes=(1, 2)) -> str:
+    """The command's last line on stderr is its one ``error:`` line (progress lines of the
+    work done before may precede it), without a traceback."""
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode in codes, (p.returncode, p.stderr[-3000:])
+    assert "Traceback" not in p.stderr and "Error:" not in p.stderr, p.stderr[-3000:]
+    assert [ln for ln in lines if ln.startswith("error:")] == lines[-1:], p.stderr[-3000:]
+    assert re.search(pattern, lines[-1]), lines[-1]
+    return lines[-1]
+
+
+def _earlier_results(out: Path) -> dict:
+    """A folder holding an earlier run's results (as anneal writes them)."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "result.json").write_text('{"knot": "3_1", "epsilon": 80.1}\n')
+    (out / "best.xyz").write_text("1 0 0 0\n2 1 0 0\n3 0 1 0\n1 0 0 0\n")
+    (out / "manifest.json").write_text('{"command": "anneal", "files": ["best.xyz", '
+                                       '"result.json"]}\n')
+    (out / "mine.txt").write_text("a file of the user's\n")
+    return _snapshot(out)
+
+
+QUICK_ANNEAL = ["anneal", "3_1", "--beads", "40", "--moves", "2000", "--replicas", "1",
+                "--rounds", "1", "--schedule", "geometric", "--no-polish"]
+
+
+def test_overwrite_on_a_full_disk_keeps_the_earlier_results(small_fs, tmp_path):
+    """Rows 1 and 4: --overwrite deleted the earlier results first; the new ones then did not
+    fit: a traceback and an empty folder."""
+    from helpers import fill_up
+
+    fs = small_fs("1m")
+    before = _earlier_results(fs / "out")
+    fill_up(fs, leave=4096)
+    p = _cli(*QUICK_ANNEAL, "--out", fs / "out", "--overwrite", cwd=tmp_path)
+    _ends_in_one_error_line(p, r"error: cannot write .*out.*: no space left on device",
+                            codes=(1,))
+    assert _snapshot(fs / "out") == before  # nothing lost, nothing half-written
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_ctrl_c_during_an_overwrite_keeps_the_earlier_results(tmp_path):
+    """Row 1: Ctrl-C at 6 s of `anneal 4_1 --out DIR --overwrite` left DIR empty."""
+    import signal
+    import time
+
+    before = _earlier_results(tmp_path / "out")
+    p = subprocess.Popen([*CLI, "anneal", "4_1", "--out", str(tmp_path / "out"), "--overwrite"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    time.sleep(6)
+    p.send_signal(signal.SIGINT)
+    _, stderr = p.communicate(timeout=120)
+    assert p.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    assert _snapshot(tmp_path / "out") == before
+
+
+# --- atlas folders: a full disk, a smaller atlas, two atlases at once (rows 4, 11) ------------
+
+
+def _earlier_atlas(out: Path, knots=("3_1", "4_1", "5_1")) -> dict:
+    """A folder holding an earlier (larger) atlas, and a file of the user's."""
+    (out / "knots").mkdir(parents=True)
+    (out / "index.html").write_text("<html>the earlier atlas</html>\n")
+    (out / "atlas.json").write_text('{"knots": []}\n')
+    for k in knots:
+        (out / "knots" / f"{k}.html").write_text(f"<html>{k}</html>\n")
+    (out / "notes.txt").write_text("a file of the user's\n")
+    return _snapshot(out)
+
+
+def test_atlas_pages_on_a_full_disk_keep_the_earlier_atlas(small_fs, tmp_path):
+    """Row 4: a traceback (ENOSPC in the plotly writer), a truncated plotly.min.js."""
+    from helpers import fill_up
+
+    fs = small_fs("3m")
+    before = _earlier_atlas(fs / "atlas")
+    fill_up(fs, leave=1 << 20)  # plotly.min.js alone takes 4.9 MB
+    p = _cli("atlas", "--knots", "3_1", "--stored", "--db", tmp_path / "r.db", "--out",
+             fs / "atlas", cwd=tmp_path)
+    _ends_in_one_error_line(p, r"error: cannot write .*atlas.*: no space left on device",
+                            codes=(1,))
+    assert _snapshot(fs / "atlas") == before  # no half-written page, no hidden leftover
+
+
+def test_a_smaller_atlas_leaves_no_page_of_a_larger_one(tmp_path):
+    """Row 11: `atlas --stored --knots 3_1` into a larger atlas's folder left its other pages
+    (stale, unlinked)."""
+    _earlier_atlas(tmp_path / "atlas")
+    p = _cli("atlas", "--knots", "3_1", "--stored", "--db", tmp_path / "r.db", "--out",
+             tmp_path / "atlas", cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert sorted(q.name for q in (tmp_path / "atlas" / "knots").iterdir()) == ["3_1.html"]
+    assert "the earlier atlas" not in (tmp_path / "atlas" / "index.html").read_text()
+    assert (tmp_path / "atlas" / "notes.txt").read_text() == "a file of the user's\n"
+    assert not [q for q in (tmp_path / "atlas").iterdir() if q.name.startswith(".")]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="flock")
+def test_two_atlases_cannot_write_one_folder_at_once(tmp_path):
+    """Row 11: no lock (anneal has one): two atlases with the same --out ended mixed. The
+    folder is held here as a running atlas holds it (an exclusive flock on the folder)."""
+    import fcntl
+    import os
+
+    out = tmp_path / "atlas"
+    out.mkdir()
+    fd = os.open(out, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        p = _cli("atlas", "--knots", "3_1", "--stored", "--db", tmp_path / "r.db", "--out",
+                 out, cwd=tmp_path)
+    finally:
+        os.close(fd)
+    _one_error_line(p, r"--out .*atlas is in use by another run", codes=(2,))
+    assert list(out.iterdir()) == [] and not (tmp_path / "r.db").exists()
