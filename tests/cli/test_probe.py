@@ -854,3 +854,46 @@ def test_two_atlases_cannot_write_one_folder_at_once(tmp_path):
         os.close(fd)
     _one_error_line(p, r"--out .*atlas is in use by another run", codes=(2,))
     assert list(out.iterdir()) == [] and not (tmp_path / "r.db").exists()
+
+
+# --- warnings (row 17) ------------------------------------------------------------------------
+
+
+def test_a_warning_that_reaches_the_command_line_is_one_plain_line(capsys, monkeypatch):
+    """Row 17: Python's two lines naming typer/main.py:1445; now one plain line, once."""
+    import importlib
+    import warnings
+
+    from stiffknots.errors import ChainWarning
+
+    M = importlib.import_module("stiffknots.cli.main")  # the module, not the package's main()
+
+    monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)
+    M._plain_warnings()
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        for _ in range(2):
+            warnings.warn("the contact distance 0.122 is below 0.504: contacts are missed",
+                          ChainWarning, stacklevel=1)
+    err = capsys.readouterr().err
+    assert err == "warning: the contact distance 0.122 is below 0.504: contacts are missed\n"
+
+
+@pytest.mark.slow
+def test_relax_in_a_thin_tube_says_so_in_one_plain_line(tmp_path):
+    """Row 17: `relax --w-over-L 0.0008` printed the analysis's ChainWarning mid-output."""
+    p = _cli("relax", DATA / "3.1.vect", "--w-over-L", "0.0008", "--moves", "1000",
+             "--replicas", "1", cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert "Warning" not in p.stderr and "typer" not in p.stderr, p.stderr
+    notes = [ln for ln in p.stdout.splitlines() if ln.startswith("note:")]
+    assert len(notes) == 1 and "contacts are missed" in notes[0], p.stdout
+
+
+@pytest.mark.slow
+def test_a_default_thin_limit_run_prints_no_internal_warning(tmp_path):
+    """Row 17: `thin-limit 4_1 --out DIR` with its defaults printed '…/typer/main.py:1445:
+    ChainWarning: the contact distance 0.122 is below 0.504 …' mid-output."""
+    p = _cli("thin-limit", "4_1", "--out", tmp_path / "out", cwd=tmp_path, timeout=1200)
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "Warning" not in p.stderr + p.stdout and "warning:" not in p.stderr

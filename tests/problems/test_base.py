@@ -375,3 +375,26 @@ def test_save_refuses_a_folder_holding_another_runs_results(tmp_path):
     (tmp_path / "b").mkdir()
     (tmp_path / "b" / "notes.txt").write_text("mine\n")  # files of no run: fine
     assert res.save(tmp_path / "b")["result"] == tmp_path / "b" / "result.json"
+
+
+def test_the_runs_own_shape_reading_warns_nobody():
+    """#40 row 17: a run in a thin tube (thin-limit's defaults, relax --w-over-L) printed the
+    analysis's ChainWarning ("the contact distance 0.24 is below 0.514 …") at typer's line in
+    the middle of the output: the run reads its own chain at its own width on purpose. The
+    warning's text is kept for a command to say in one plain line."""
+    import warnings
+    from types import SimpleNamespace
+
+    from stiffknots.analysis.synthetic import torus_braid
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.problems.base import observe_shape
+
+    r = SimpleNamespace(coords=torus_braid(2, 150, separation=0.2), observables={})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        observe_shape(r, MoveParams(exclusion="tube", w=0.12))
+    assert r.observables["shape"]
+    assert "contacts are missed" in r.observables["shape_note"]
+    wide = SimpleNamespace(coords=torus_braid(2, 150), observables={})
+    observe_shape(wide, MoveParams(exclusion="bead"))
+    assert "shape_note" not in wide.observables

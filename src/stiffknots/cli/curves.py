@@ -250,6 +250,10 @@ def relax(
               f"({d['shape']}, {width['text']}); "
               + ("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
+    note = res.best.observables.get("shape_note") if res.replicas else None
+    if note:  # --w-over-L thinner than the shape analysis sees: one plain line
+        out.print(f"note: its shape was read at the tube's diameter, where {note}",
+                  markup=False, highlight=False, soft_wrap=True)
     if out_path is not None:
         out.print(f"results in {out_path}/", markup=False, highlight=False)
     finish(res, replicas)

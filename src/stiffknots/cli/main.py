@@ -163,9 +163,32 @@ def _sigterm_as_interrupt() -> None:
         pass
 
 
+def _plain_warnings() -> None:
+    """A warning of stiffknots that reaches the command line (the analysis warns a user of
+    the Python API about a chain it reads) is one plain line, said once: not Python's two
+    lines naming a file of a library (typer's, where the command was called)."""
+    import warnings
+
+    from stiffknots.errors import StiffKnotsWarning
+
+    shown = warnings.showwarning
+    said: set[str] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, StiffKnotsWarning):
+            return shown(message, category, filename, lineno, file, line)
+        text = " ".join(str(message).split())
+        if text not in said:
+            said.add(text)
+            _say(f"warning: {text}")
+
+    warnings.showwarning = show
+
+
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
     _sigterm_as_interrupt()
+    _plain_warnings()
     _note_cold_cache()
     _note_mirror()
     _json_stdout_only()

@@ -143,13 +143,29 @@ def observe_shape(r: Replica, params) -> None:
     """Classify a closed replica's chain (:func:`stiffknots.analysis.classify`, §VII) with the
     exclusion distance of its run; store ``shape`` ('CB2', '4C', '80', 'other'), ``label``,
     ``multiplicity``, ``shape_reason`` and ``structure`` (its contact structure named, §V B:
-    :func:`stiffknots.analysis.structure_name`) in its observables."""
-    from stiffknots.analysis import classify
+    :func:`stiffknots.analysis.structure_name`) in its observables.
 
-    s = classify(r.coords, d=params.w if params.exclusion == "tube" else params.d)
+    The analysis warns a user who reads a chain where it cannot see every contact (a tube much
+    thinner than a bond); here the run itself reads it, with its own width: the warning is
+    kept as ``shape_note`` (for a command to say in one plain line where the user chose that
+    width), not shown as a Python warning in the middle of the output."""
+    import warnings
+
+    from stiffknots.analysis import classify
+    from stiffknots.errors import ChainWarning
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always", ChainWarning)
+        s = classify(r.coords, d=params.w if params.exclusion == "tube" else params.d)
+    for w in seen:
+        if not issubclass(w.category, ChainWarning):  # not ours: as it came
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    notes = [str(w.message) for w in seen if issubclass(w.category, ChainWarning)]
     r.observables.update(shape=f"CB{s.multiplicity}" if s.label == "CB" else s.label,
                          label=s.label, multiplicity=s.multiplicity, shape_reason=s.reason,
                          structure=s.structure.get("name"))
+    if notes:
+        r.observables["shape_note"] = notes[0]
 
 
 def knot_code(coords: np.ndarray, closed: bool = True) -> str:
