@@ -327,15 +327,48 @@ def _threaded() -> bool:
     return hasattr(os, "fork") and threading.active_count() > 1
 
 
+#: forks of :func:`_in_child`, one at a time (two threads checking knots at once)
+_FORK_LOCK = threading.Lock()
+#: the process that is forking in :func:`_in_child` (None: none is)
+_FORKING: list[int | None] = [None]
+
+
+def _fork_quiet_hook(unraisable) -> None:
+    """``sys.unraisablehook`` of a process that forks in :func:`_in_child`: in such a child,
+    until its own code runs, an error of an after-fork handler is not reported. Python's own
+    (``threading._after_fork``) re-initialises the locks of the parent's other threads, which
+    the child does not have, and can fail at it in a process with several threads ("SystemError
+    … _thread.RLock", tracebacks on the user's stderr with two ``sk.anneal`` calls in two
+    threads); the child runs topoly alone and leaves by ``os._exit``. Everything else goes to
+    the hook that was there before."""
+    if _FORKING[0] is not None and os.getpid() != _FORKING[0]:
+        return
+    _PREVIOUS_HOOK[0](unraisable)
+
+
+_PREVIOUS_HOOK: list = [None]
+
+
 def _in_child(fn):
     """``fn()`` in a forked child process; its result (or exception) comes back pickled
-    through a pipe. The child runs nothing but ``fn`` and leaves by ``os._exit``."""
+    through a pipe. The child runs nothing but ``fn`` and leaves by ``os._exit``; what its
+    after-fork handlers report is not shown (:func:`_fork_quiet_hook`)."""
     import pickle
+    import sys
 
-    r, w = os.pipe()
-    pid = os.fork()
+    with _FORK_LOCK:
+        if sys.unraisablehook is not _fork_quiet_hook:
+            _PREVIOUS_HOOK[0], sys.unraisablehook = sys.unraisablehook, _fork_quiet_hook
+        r, w = os.pipe()
+        _FORKING[0] = os.getpid()
+        try:
+            pid = os.fork()
+        finally:
+            if os.getpid() == _FORKING[0]:  # the parent (the child keeps it: its hook)
+                _FORKING[0] = None
     if pid == 0:  # pragma: no cover (the child)
         code = 0
+        _FORKING[0] = None  # the child's own errors are reported again
         _IN_CHILD[0] = True
         try:
             os.close(r)
