@@ -7,6 +7,12 @@ with ``error:``, without a traceback, and write nothing: the working folder stay
 unchanged. Each case fails before any work, in about a second or two (the loading of the
 command line); the cases that first build a knot's chain take a few seconds more and run with
 the slow tests (``make test-all``), as does the long tail of the matrix.
+
+A second part (#40) probes what the machine and the user's files can do to a run: a full disk
+(a small tmpfs, mounted for the test where that is permitted), read-only and immutable
+databases, curves that meet themselves, of extreme scale, with a byte-order mark or of 10⁵
+vertices, two atlases on one folder, Ctrl-C at any moment, threads, mirror names: every case
+ends in one clear line and loses nothing.
 """
 
 from __future__ import annotations
