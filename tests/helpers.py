@@ -3,6 +3,7 @@ a smooth trefoil, a chain in the fixed-force ensemble."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -53,3 +54,13 @@ def load_bench(name: str):
     sys.modules[name] = mod
     spec.loader.exec_module(mod)
     return mod
+
+
+def fill_up(folder: Path, leave: int = 0) -> None:
+    """Fill the file system of ``folder`` with a file until ``leave`` bytes are free."""
+    free = os.statvfs(folder).f_bavail * os.statvfs(folder).f_frsize
+    with open(folder / "filler", "wb") as f:
+        try:
+            f.write(b"\0" * max(free - leave, 0))
+        except OSError:
+            pass

@@ -185,3 +185,20 @@ def test_recorded_flags_win_and_meta_round_trips(tmp_path):
         assert not d.closed and d.meta == {"k": 1}
         assert closure_note(d).startswith("open: recorded")
         assert load(tmp_path / f"o{suffix}", closed=True).closed
+
+
+@pytest.mark.parametrize("suffix", [".txt", ".xyz", ".csv", ".json", ".vect"])
+def test_a_byte_order_mark_drops_no_vertex(tmp_path, suffix):
+    """#40 row 8: a file that starts with a UTF-8 byte-order mark (Notepad, Excel) reads the
+    same as without it (it dropped the first vertex as a header line)."""
+    x = trefoil(40)
+    plain = tmp_path / f"plain{suffix}"
+    if suffix in (".txt", ".csv"):
+        plain.write_text(_rows(x, "," if suffix == ".csv" else " "))
+    else:
+        save(Chain(x, True), plain)
+    bom = tmp_path / f"bom{suffix}"
+    bom.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
+    a, b = load(plain), load(bom)
+    assert b.n_beads == a.n_beads == 40
+    np.testing.assert_array_equal(a.coords, b.coords)

@@ -30,6 +30,7 @@ from stiffknots import measures as M
 from stiffknots._json import json_default
 from stiffknots._version import __version__
 from stiffknots.errors import ChainFormatError
+from stiffknots.geometry import rescaled
 
 __all__ = ["Chain", "as_coords", "regular_polygon"]
 
@@ -92,9 +93,10 @@ class Chain:
         if n < nmin:
             kind = "closed" if self.closed else "open"
             raise ValueError(f"a {kind} chain needs at least {nmin} beads, got {n}")
-        lengths = self.bond_lengths()
-        if np.any(lengths == 0.0):
-            k = int(np.argmin(lengths))
+        # a repeated bead, tested without a norm (1e-300 underflowed to 0, 1e300 overflowed)
+        zero = ~np.any(self.bond_vectors(), axis=1)
+        if np.any(zero):
+            k = int(np.argmax(zero))
             hint = ""
             if self.closed and k == n - 1:
                 hint = " (a closed chain must not repeat its first bead at the end)"
@@ -161,7 +163,9 @@ class Chain:
         """Normalised energy ``ε = E L / C`` (eq. (11)); ``ε = E_d N / C`` for a closed
         unit-bond chain (§VII). Independent of ``C`` and of the chain's scale."""
         _check_C(C)
-        return self.energy(C) * self.length / C
+        x = rescaled(self.coords)  # a power of two: 1e300 coordinates overflowed to nan
+        chain = self if x is self.coords else Chain(x, self.closed)
+        return chain.energy(C) * chain.length / C
 
     def turning_angles(self) -> np.ndarray:
         """Angle ``θ_i ∈ [0, π]`` between the two bonds meeting at each bending vertex.

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,7 +17,7 @@ from typing import Any
 
 from stiffknots._json import dumps
 
-__all__ = ["atomic_path", "write_bytes", "write_json", "write_text"]
+__all__ = ["atomic_path", "replaced_entries", "write_bytes", "write_json", "write_text"]
 
 
 def _umask() -> int:
@@ -46,10 +47,65 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         os.close(fd)
         yield tmp
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError) and exc.filename in (None, str(tmp)):
+            exc.filename = str(path)  # a full disk: name the file the user asked for
         raise
+
+
+@contextlib.contextmanager
+def replaced_entries(folder: str | os.PathLike, names, prefix: str = "set") -> Iterator[Path]:
+    """Yield an empty hidden folder inside ``folder`` to write a new set of files into; on
+    success the set replaces the previous one in ``folder``, on an exception (a full disk,
+    Ctrl-C) the previous set stays as it was and the new one is removed.
+
+    ``names``: the entries (files, folders) of ``folder`` that belong to the set: the ones
+    the new set does not write again go too (no stale page of a larger set stays); the others
+    of ``folder`` are left alone. The swap is one rename per entry (no space needed), the
+    previous entries renamed aside first and put back if a rename fails. Hidden folders
+    ``.{prefix}-new-*`` and ``.{prefix}-old-*`` left by a killed process are removed first
+    (the caller holds the folder: a lock).
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for left in [*folder.glob(f".{prefix}-new-*"), *folder.glob(f".{prefix}-old-*")]:
+        shutil.rmtree(left, ignore_errors=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{prefix}-new-", dir=folder))
+    try:
+        try:
+            yield stage
+        except OSError as exc:  # name the file the user will look for, not the hidden one
+            if exc.filename and str(exc.filename).startswith(str(stage)):
+                exc.filename = str(folder) + str(exc.filename)[len(str(stage)):]
+            elif not exc.filename:  # a write that failed names no file: the folder
+                exc.filename = str(folder)
+            raise
+        old = Path(tempfile.mkdtemp(prefix=f".{prefix}-old-", dir=folder))
+        moved: list[str] = []
+        placed: list[str] = []
+        try:
+            for name in dict.fromkeys([*names, *os.listdir(stage)]):
+                if os.path.lexists(folder / name):
+                    os.replace(folder / name, old / name)
+                    moved.append(name)
+            for name in os.listdir(stage):
+                os.replace(stage / name, folder / name)
+                placed.append(name)
+        except BaseException:
+            for name in placed:
+                with contextlib.suppress(OSError):
+                    os.replace(folder / name, stage / name)
+            for name in moved:
+                with contextlib.suppress(OSError):
+                    os.replace(old / name, folder / name)
+            with contextlib.suppress(OSError):
+                old.rmdir()  # only if every entry went back
+            raise
+        shutil.rmtree(old, ignore_errors=True)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> Path:

@@ -127,8 +127,10 @@ def _fmt(v: float) -> str:
 
 
 def _read_text(path: PathLike) -> str:
+    # utf-8-sig: a byte-order mark (Notepad, Excel) is not text; read as a character it
+    # turned the first vertex line into a header, dropping that vertex
     try:
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8-sig") as fh:
             return fh.read()
     except FileNotFoundError:
         raise ChainFormatError(f"{path}: no such file") from None
@@ -146,8 +148,15 @@ def _make_chain(coords: Any, closed: bool, meta: dict, path: PathLike) -> Chain:
 
 
 def _ends_coincide(x: np.ndarray) -> bool:
-    """First and last bead equal (exactly, or within KymoKnot's 1e-6 ring tolerance)."""
-    return bool(np.array_equal(x[0], x[-1]) or np.linalg.norm(x[0] - x[-1]) < 1e-6)
+    """First and last bead equal (exactly, or within KymoKnot's 1e-6 ring tolerance and a
+    thousandth of the typical bond: a curve drawn at 1e-300 is not closed by its size)."""
+    if np.array_equal(x[0], x[-1]):
+        return True
+    gap = float(np.max(np.abs(x[0] - x[-1])))  # components: no overflow at 1e300
+    if not gap < 1e-6 or len(x) < 3:
+        return False
+    bond = float(np.median(np.max(np.abs(np.diff(x, axis=0)), axis=1)))
+    return gap < 1e-3 * bond and float(np.linalg.norm(x[0] - x[-1])) < 1e-6
 
 
 def to_xyz(chain: Chain, path: PathLike, dialect: str = "topoly") -> None:

@@ -6,8 +6,23 @@ diameter w around the centre line) and of the strand-passage guard of the Monte 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
+
+
+def rescaled(coords) -> np.ndarray:
+    """``coords`` (N, 3) scaled by a power of two to a largest coordinate in [1/2, 2) when
+    it lies outside [2⁻¹⁶, 2¹⁶] (a scaling is an isotopy; a power of two is exact), else as
+    given."""
+    x = np.asarray(coords, dtype=np.float64)
+    if not x.size:
+        return x
+    s = float(np.max(np.abs(x)))
+    if s == 0.0 or not math.isfinite(s) or 2.0 ** -16 <= s <= 2.0 ** 16:
+        return x
+    return np.ldexp(x, -math.frexp(s)[1])
 
 
 @njit(cache=True, inline="always")

@@ -232,6 +232,23 @@ def test_unknown_names():
         get_knot("K4a2")
 
 
+def test_mirror_spellings_are_the_same_knot():
+    """#40 row 13: the mirror spellings of KnotInfo, SnapPy and knot tables name the knot (ε
+    does not depend on the mirror) and say so; no name of the catalogue reads as one."""
+    from stiffknots.knots.catalogue import _ALIASES, mirror_note, mirror_of
+
+    for s in ("m3_1", "3_1*", "3_1m", "3_1!", "mirror(3_1)", "M3_1", "m 3_1", "trefoil*",
+              "T(2,3)*"):
+        assert get_knot(s).name == "3_1", s
+        assert mirror_of(s) == "3_1", s
+        assert "do not depend on the mirror" in mirror_note(s)
+    assert get_knot("mK11n34").name == get_knot("K11n34m").name == "11n_34"
+    assert mirror_of("3_1") is None and mirror_note("3_1") is None
+    assert not [n for n in (*knot_names(), *_ALIASES) if mirror_of(n)]
+    with pytest.raises(UnknownKnotError, match=r"'4_9'.*mirror image of '4_9'"):
+        get_knot("m4_9")
+
+
 def test_torus_errors():
     with pytest.raises(UnknownKnotError, match="link of 2 components"):
         get_knot("T(2,4)")

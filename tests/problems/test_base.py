@@ -265,3 +265,46 @@ def test_a_replicas_time_counts_its_polish_and_knot_check(monkeypatch):
     assert pol > 0 and r.wall_time >= mc + pol
     assert len(spent) == 1 and spent[0] >= 0.4
     assert r.cpu_time >= spent[0]  # the polish's CPU is counted
+
+
+def test_save_refuses_a_folder_holding_another_runs_results(tmp_path):
+    """#40 row 15: ``result.save(folder)`` wrote into another run's results without asking,
+    where the command line refuses its --out (unless --overwrite)."""
+    from stiffknots.errors import UserInputError
+    from stiffknots.problems.base import ReplicaSet
+
+    res = ReplicaSet("3_1", 150, 0, {}, [], 0.0)
+    res.save(tmp_path / "a")  # a new folder
+    before = (tmp_path / "a" / "result.json").read_bytes()
+    with pytest.raises(UserInputError, match=r"a holds the results of another run "
+                                             r"\(result\.json\); choose another folder or "
+                                             r"pass overwrite=True"):
+        res.save(tmp_path / "a")
+    assert (tmp_path / "a" / "result.json").read_bytes() == before
+    res.save(tmp_path / "a", overwrite=True)
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "notes.txt").write_text("mine\n")  # files of no run: fine
+    assert res.save(tmp_path / "b")["result"] == tmp_path / "b" / "result.json"
+
+
+def test_the_runs_own_shape_reading_warns_nobody():
+    """#40 row 17: a run in a thin tube (thin-limit's defaults, relax --w-over-L) printed the
+    analysis's ChainWarning ("the contact distance 0.24 is below 0.514 …") at typer's line in
+    the middle of the output: the run reads its own chain at its own width on purpose. The
+    warning's text is kept for a command to say in one plain line."""
+    import warnings
+    from types import SimpleNamespace
+
+    from stiffknots.analysis.synthetic import torus_braid
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.problems.base import observe_shape
+
+    r = SimpleNamespace(coords=torus_braid(2, 150, separation=0.2), observables={})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        observe_shape(r, MoveParams(exclusion="tube", w=0.12))
+    assert r.observables["shape"]
+    assert "contacts are missed" in r.observables["shape_note"]
+    wide = SimpleNamespace(coords=torus_braid(2, 150), observables={})
+    observe_shape(wide, MoveParams(exclusion="bead"))
+    assert "shape_note" not in wide.observables

@@ -121,3 +121,42 @@ def _closed_pipe():
     r.close()
     w.close()
     return w
+
+
+def test_ctrl_c_while_the_pool_stops_stops_it_whole_and_once(monkeypatch):
+    """#40 row 5: Ctrl-C during `anneal 4_1` (1 of 6 tries) ended in "AttributeError:
+    'NoneType' object has no attribute 'values'" in pool._terminate: an interrupt that fell
+    inside the pool's stop left the pool half-stopped (its executor shut down, its workers
+    maybe alive), and the next close stopped the shut-down executor again. A Ctrl-C there is
+    now raised once the stop is complete, and a pool is stopped once."""
+    import contextlib
+    import multiprocessing.process as mpp
+
+    import psutil
+
+    pool = WorkerPool(2).start()
+    _, interrupted = pool.run(_pid_after_report, [(0,), (1,)])
+    assert not interrupted
+    workers = [p.pid for p in pool._ex._processes.values()]  # noqa: SLF001
+    real = mpp.BaseProcess.terminate
+    calls = []
+
+    def ctrl_c_once(proc):  # the Ctrl-C arrives while the first worker is stopped
+        calls.append(proc.pid)
+        real(proc)
+        if len(calls) == 1:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(mpp.BaseProcess, "terminate", ctrl_c_once)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            pool.close()
+        pool.close()  # as the caller's `with` does next: nothing to stop, no AttributeError
+        assert set(calls) == set(workers)
+        alive = [pid for pid in workers
+                 if psutil.pid_exists(pid) and psutil.Process(pid).status() != "zombie"]
+        assert not alive
+    finally:  # a worker left alive would hold the test run at its exit
+        for pid in workers:
+            with contextlib.suppress(psutil.Error):
+                psutil.Process(pid).kill()

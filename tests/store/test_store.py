@@ -616,3 +616,77 @@ def test_kill_9_at_random_moments_leaves_no_half_row(tmp_path):
           f"{len(written)} rows stored")
     for f in tmp_path.glob("kill.db*"):  # ~100 MB: do not keep it among pytest's last runs
         f.unlink()
+
+
+# ---- read-only media, immutable files, full disks (#40 rows 2, 3, 4, 14) -------------------------
+
+
+def test_a_query_reads_a_database_on_read_only_media(small_fs):
+    """Row 3: a good database on a read-only mount was 'not a usable SQLite database'."""
+    fs = small_fs("4m")
+    with Store(fs / "r.db") as s:
+        fill_5_2(s)
+    small_fs.readonly(fs)
+    with Store(fs / "r.db", readonly=True) as s:
+        assert len(s.replicas(knot="5_2")) == 12
+    with pytest.raises(StoreError, match=r"r\.db: cannot open the results database for "
+                                         r"writing \(Read-only file system"):
+        Store(fs / "r.db")
+
+
+def test_an_immutable_database_is_refused_when_opened_not_at_its_first_row(tmp_path,
+                                                                           immutable):
+    """Row 2: an immutable file opened (SQLite falls back to reading) and the first replica
+    of the sweep was lost with 'attempt to write a readonly database'."""
+    with Store(tmp_path / "r.db") as s:
+        s.put(make_row(), chain())
+    immutable(tmp_path / "r.db")
+    with pytest.raises(StoreError, match=r"cannot open the results database for writing "
+                                         r"\(Operation not permitted"):
+        Store(tmp_path / "r.db")
+    with Store(tmp_path / "r.db", readonly=True) as s:
+        assert len(s.replicas()) == 1
+
+
+def test_a_query_writes_nothing_into_an_empty_file(tmp_path):
+    """Row 14: `db states` on a 0-byte --db wrote the schema into it."""
+    (tmp_path / "empty.db").write_bytes(b"")
+    for kw in ({"readonly": True}, {"create": False}):
+        with pytest.raises(StoreError, match=r"empty\.db is empty: no results database yet"):
+            Store(tmp_path / "empty.db", **kw)
+    assert (tmp_path / "empty.db").read_bytes() == b""
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.db"]
+
+
+def test_a_full_disk_stores_nothing_half_and_keeps_every_stored_row(small_fs):
+    """Row 4: 'database or disk is full' was a traceback; now one StoreError naming the file
+    and the full disk, and the rows stored before stay, whole."""
+    from helpers import fill_up
+
+    fs = small_fs("2m")
+    s = Store(fs / "r.db")
+    s.put(make_row(replica=0), chain())
+    fill_up(fs, leave=0)
+    with pytest.raises(StoreError, match=r"r\.db: cannot write the results database \(no "
+                                         r"space left on the device.*rows stored before are "
+                                         r"kept"):
+        for r in range(1, 200):
+            s.put(make_row(replica=r), chain(seed=r))
+    s.close()
+    (fs / "filler").unlink()
+    with Store(fs / "r.db") as s:
+        assert s._query("PRAGMA integrity_check") == [("ok",)]
+        rows = s.replicas()
+        assert rows[0]["replica"] == 0 and len(rows) >= 1
+
+
+def test_a_database_that_does_not_fit_leaves_no_file(small_fs):
+    """Row 4: a new database on a full disk left a 0-byte file and 0-byte -wal and -shm."""
+    from helpers import fill_up
+
+    fs = small_fs("1m")
+    fill_up(fs, leave=0)
+    with pytest.raises(StoreError, match=r"new\.db: cannot open the results database for "
+                                         r"writing.*(No space left|disk is full)"):
+        Store(fs / "new.db")
+    assert sorted(p.name for p in fs.iterdir()) == ["filler"]

@@ -81,7 +81,7 @@ RESULT_FILES = ("manifest.json", "result.json", "summary.json", "report.md")
 #: killed while writing, maybe in the middle of a temporary file) holds another run's files;
 #: ``--overwrite`` removes them
 RUN_FILES = (*RESULT_FILES, "report.html", "best.xyz", "best.json", "best.png", "traces.npz",
-             "replica_*.xyz", "tension.png", "Le_*", "F_*", ".*.tmp")
+             "replica_*.xyz", "tension.png", "Le_*", "F_*", ".*.tmp", ".*.previous-*")
 
 
 class UserError(UserInputError):
@@ -163,6 +163,9 @@ def choice(option: str, value: str, allowed) -> str:
 # A results folder is checked, created and locked before any work (prepare_out). The run writes
 # into it inside ResultsFolder: each file atomically, manifest.json last, so a folder with a
 # manifest holds a complete set; on Ctrl-C or an error the files of the run are removed again.
+# An earlier run's files (--overwrite) stay in place while the run computes; ResultsFolder sets
+# them aside under hidden names, removes them once the new set is complete and puts them back
+# if it is not (a full disk, Ctrl-C).
 # A folder this process created and left empty is removed when the command fails
 # (release_folders, called by main).
 
@@ -231,6 +234,16 @@ def prepare_folder(path: str | Path | None, option: str = "--out") -> Path | Non
     return None if path is None else _writable_folder(path, option)
 
 
+def claim_folder(path: str | Path | None, option: str = "--out") -> Path | None:
+    """:func:`prepare_folder`, and the folder locked until this process ends: a second run
+    that claims it gets one line and exit code 2 (``atlas --out``: two atlases writing one
+    folder ended mixed)."""
+    folder = prepare_folder(path, option)
+    if folder is not None:
+        _lock(folder, option)
+    return folder
+
+
 def prepare_file(path: str | Path | None, option: str) -> Path | None:
     """Check before any work that a file can be written at ``path`` (``resample DEST``,
     ``atlas --db``): not '', not a folder, its folder creatable and writable (created now,
@@ -247,6 +260,13 @@ def prepare_file(path: str | Path | None, option: str) -> Path | None:
     except UserError as exc:
         why = str(exc).rsplit("(", 1)[-1] if str(exc).endswith(")") else "not a folder)"
         raise UserError(f"{option} {path}: cannot write there ({why}") from None
+    if path.is_file():  # an existing file (a database to add to): writable itself?
+        try:
+            with open(path, "r+b"):
+                pass
+        except OSError as exc:  # read-only, immutable (chattr +i), a read-only mount
+            raise UserError(f"{option} {path}: cannot write it "
+                            f"({exc.strerror or type(exc).__name__})") from None
     return path
 
 
@@ -254,7 +274,8 @@ def prepare_out(path: str | Path | None, overwrite: bool = False, option: str = 
                 ) -> Path | None:
     """Check ``--out`` before any work and claim it: exit 2 if it cannot be written, if another
     run is writing there, or if it holds another run's files and ``overwrite`` is off; with
-    ``overwrite``, remove what the earlier run wrote."""
+    ``overwrite``, what the earlier run wrote is replaced when the new results are complete
+    (:class:`ResultsFolder`): until then it stays."""
     if path is None:
         return None
     path = _writable_folder(path, option)
@@ -265,8 +286,6 @@ def prepare_out(path: str | Path | None, overwrite: bool = False, option: str = 
                 else "the files of an unfinished run (no manifest.json)")
         raise UserError(f"{option} {path} holds {what} ({old[0]}); choose another folder "
                         "or add --overwrite")
-    if old:
-        _remove_previous(path)
     return path
 
 
@@ -287,19 +306,39 @@ def _remove(p: Path) -> None:
             p.unlink()
 
 
-def _remove_previous(path: Path) -> None:
-    """Delete what an earlier run wrote into ``path``: the files its manifest lists and the
-    names a run writes (a run killed while writing left no manifest)."""
+def _set_aside(path: Path) -> list[tuple[Path, Path]]:
+    """Rename what an earlier run wrote into ``path`` — the entries its manifest lists (their
+    first path component) and the names a run writes (a run killed while writing left no
+    manifest) — to hidden names; returns the (name, hidden name) pairs. Renames in one
+    folder need no space on the disk."""
     names: list[str] = []
     with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):
         names = [str(n) for n in json.loads((path / MANIFEST).read_text()).get("files", [])]
     root = path.resolve()
+    top = []
     for name in [*names, *_run_files(path)]:
         p = (path / name).resolve()
         if root not in p.parents:
             continue  # never outside the folder
-        _remove(p)
-        _remove_empty([q for q in p.parents if root in q.parents])  # emptied sub-folders
+        top.append(p.relative_to(root).parts[0])
+    moved: list[tuple[Path, Path]] = []
+    try:
+        for name in dict.fromkeys(top):
+            src = path / name
+            if os.path.lexists(src):
+                dst = path / f".{name}.previous-{os.getpid()}"
+                os.replace(src, dst)
+                moved.append((src, dst))
+    except BaseException:
+        _put_back(moved)
+        raise
+    return moved
+
+
+def _put_back(moved: list[tuple[Path, Path]]) -> None:
+    for src, dst in reversed(moved):
+        with contextlib.suppress(OSError):
+            os.replace(dst, src)
 
 
 def write_manifest(path: Path, files, command: str) -> None:
@@ -326,37 +365,55 @@ class ResultsFolder:
     error every file and folder the run added is removed again, so that the folder never holds
     part of a set (``kill -9`` cannot be caught: each file is still complete, being written
     atomically, and the missing manifest marks the set unfinished). Ctrl-C then raises
-    :class:`Interrupted` saying so.
+    :class:`Interrupted` saying so. An earlier run's files (``--overwrite``) are set aside
+    first and removed once the new set is complete, or put back when it is not (a full disk,
+    Ctrl-C): nothing is lost.
     """
 
     def __init__(self, path: Path | None, command: str, doing: str = "writing the results"):
         self.path, self.command, self.doing = path, command, doing
         self.before: set[str] = set()
+        self.aside: list[tuple[Path, Path]] = []
 
     def _names(self) -> set[str]:
         return set(os.listdir(self.path))
 
     def __enter__(self):
         if self.path is not None:
+            self.aside = _set_aside(self.path)
             self.before = self._names()
         return self
+
+    def _undo(self, new: list[str]) -> None:
+        for n in new:  # hidden ones too: a Ctrl-C inside an atomic write can leave its .tmp
+            _remove(self.path / n)
+        _put_back(self.aside)
 
     def __exit__(self, kind, exc, tb):
         if self.path is None:
             return False
         new = sorted(self._names() - self.before)
         if kind is None:
-            new = [n for n in new if not n.startswith(".")]  # the lock probe, a temporary file
-            files = [q for n in new for q in ([self.path / n] if not (self.path / n).is_dir()
-                                              else sorted(self.path.joinpath(n).rglob("*")))
-                     if not q.is_dir()]
-            write_manifest(self.path, files, self.command)
+            try:
+                shown = [n for n in new if not n.startswith(".")]  # a probe, a temporary file
+                files = [q for n in shown
+                         for q in ([self.path / n] if not (self.path / n).is_dir()
+                                   else sorted(self.path.joinpath(n).rglob("*")))
+                         if not q.is_dir()]
+                write_manifest(self.path, files, self.command)
+            except BaseException:  # the manifest did not fit: the set is not complete
+                self._undo(new)
+                raise
+            for _, hidden in self.aside:  # the new set is complete: the earlier one goes
+                _remove(hidden)
             return False
-        for n in new:  # hidden ones too: a Ctrl-C inside an atomic write can leave its .tmp
-            _remove(self.path / n)
+        self._undo(new)
+        if isinstance(exc, OSError) and not exc.filename:
+            exc.filename = str(self.path)  # a write that failed names no file: the folder
         if issubclass(kind, KeyboardInterrupt):
+            kept = "; the earlier results were kept" if self.aside else ""
             raise Interrupted(f"interrupted while {self.doing}; the files of this run were "
-                              f"removed from {self.path}") from None
+                              f"removed from {self.path}{kept}") from None
         return False
 
 

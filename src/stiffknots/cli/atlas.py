@@ -26,12 +26,12 @@ from stiffknots.cli.app import (
     SeedOpt,
     UserError,
     choice,
+    claim_folder,
     count,
     dump,
     err,
     out,
     prepare_file,
-    prepare_folder,
 )
 
 
@@ -266,8 +266,12 @@ def atlas(
         if workers is not None:
             raise UserError("--workers is for the local cluster; a --scheduler has its own")
     names = resolve_knots(knot_list, max_crossings)
-    db = prepare_file(db, "--db")
-    out_dir = prepare_folder(out_dir, "--out")
+    from pathlib import Path
+
+    # a sweep writes --db: checked writable (a read-only or immutable file lost the first
+    # replica); --stored only reads an existing one (read-only media too)
+    db = Path(db) if stored and Path(db).is_file() else prepare_file(db, "--db")
+    out_dir = claim_folder(out_dir, "--out")  # locked: one atlas at a time writes there
     command = "stiffknots " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     with SweepProgress() as bar:  # on stderr, --json too: stdout holds the JSON alone
         d = run_atlas(names, mods, bud, db=db, out=out_dir, seed=seed, scheduler=scheduler,

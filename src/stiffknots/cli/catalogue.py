@@ -16,9 +16,13 @@ from stiffknots.cli.app import JsonOpt, UserError, dump, fmt, out, prepare_folde
 def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T(2,3) ...")],
          json_: JsonOpt = False) -> None:
     """A knot's data (KnotInfo), its energy bounds and, when n = i, its ground state."""
+    from stiffknots.knots.catalogue import mirror_note
     from stiffknots.knots.summary import knot_summary
 
     d = knot_summary(name)
+    note = mirror_note(name)
+    if note:
+        d["mirror_note"] = note
     if json_:
         dump(d)
         return
@@ -62,6 +66,8 @@ def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T
                else f"≥ {fmt(rc['lower'])}") if rc["lower"] is not None
               else "unknown (n and i unknown)")
     out.print(t)
+    if note:
+        out.print(note, markup=False, highlight=False)
 
 
 def elastica(

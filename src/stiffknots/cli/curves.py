@@ -6,10 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.table import Table
 
-from stiffknots.cli.app import JsonOpt, ReplicasOpt, UserError, count, dump, fmt, out
+from stiffknots.cli.app import JsonOpt, ReplicasOpt, UserError, count, dump, err, fmt, out
 
 FileArg = Annotated[Path, typer.Argument(
     help="A curve: .xyz, .txt/.dat/.csv/.tsv (x y z), .json, .npz/.npy, .obj (ElasticKnots), "
@@ -21,10 +22,31 @@ ClosedOpt = Annotated[bool | None, typer.Option(
     show_default=False)]
 
 
+#: the most vertices identify, resample and relax take: the time of the knot invariants
+#: (topoly's reduction) grows as the square of the vertices (docs/curves.md)
+MAX_VERTICES = 20_000
+
+
 def _load(path: Path, closed: bool | None):
     from stiffknots.formats import load
 
-    return load(path, closed=closed)
+    chain = load(path, closed=closed)
+    if chain.n_beads > MAX_VERTICES:
+        raise UserError(f"{path}: {chain.n_beads:,} vertices; identify, resample and relax take "
+                        f"curves of at most {MAX_VERTICES:,} (the knot invariants' time grows as "
+                        "the square of the vertices, docs/curves.md): give a coarser polygon")
+    return chain
+
+
+def _say_long(chain, path: Path) -> None:
+    """One line on stderr before the knot invariants of a long polygon (seconds to
+    minutes): what takes the time, and that Ctrl-C stops it."""
+    from stiffknots.knots.identify import CHILD_FROM
+
+    if chain.n_beads >= CHILD_FROM:
+        err.print(f"{path}: {chain.n_beads:,} vertices: computing the knot invariants (this "
+                  "can take minutes; Ctrl-C stops) ...", markup=False, highlight=False,
+                  soft_wrap=True)
 
 
 def _identify(chain) -> dict:
@@ -38,7 +60,15 @@ def _identify(chain) -> dict:
         raise UserError(f"cannot identify the knot: {exc}") from None
     except ValueError as exc:  # a polygon that meets itself
         raise UserError(f"cannot identify the knot: {exc}") from None
-    b = chain.bond_lengths()
+    from stiffknots.chain import Chain
+    from stiffknots.knots.singular import rescaled
+
+    # lengths and ε measured at order 1 (exact powers of two: ε is scale invariant, 1e300
+    # coordinates overflowed to inf and nan)
+    scaled = Chain(rescaled(chain.coords), chain.closed)
+    big = float(np.max(np.abs(chain.coords)))
+    factor = big / float(np.max(np.abs(scaled.coords))) if big else 1.0
+    b = scaled.bond_lengths() * factor
     d = {
         "file": str(chain.meta.get("source", "")),
         "knot": r.name,
@@ -47,9 +77,9 @@ def _identify(chain) -> dict:
         "closure": closure_note(chain),
         "closed": chain.closed,
         "beads": chain.n_beads,
-        "length": chain.length,
+        "length": scaled.length * factor,
         "bond_length_range": [float(b.min()), float(b.max())],
-        "input_epsilon": chain.epsilon(),
+        "input_epsilon": scaled.epsilon(),
         **{k: v for k, v in r.as_dict().items() if k not in ("knot", "candidates", "chirality")},
     }
     if r.name is not None and "#" not in r.name:
@@ -80,6 +110,7 @@ def identify(
 
     Ties of the HOMFLY-PT polynomial are broken by the knot complement (SnapPy)."""
     chain = _load(file, closed)
+    _say_long(chain, file)
     d = _identify(chain)
     if json_:
         dump(d)
@@ -136,6 +167,7 @@ def resample(
     chain = _load(file, closed)
     if not chain.closed:
         raise UserError(f"{file}: resample needs a closed curve (a knot); it was read as open")
+    _say_long(chain, file)
     r = _resample(chain, beads, w_over_L=w_over_l)
     save(r, dest)
     d = {"file": str(file), "out": str(dest), "closure": closure_note(chain), "beads": beads,
@@ -199,6 +231,7 @@ def relax(
     # claimed before the problem is built (identifying the curve takes seconds), as anneal
     # does: a folder holding another run's results is refused at once
     out_path = prepare_out(out_dir, overwrite)
+    _say_long(chain, file)
     problem = Relax(chain, beads, moves, replicas, seed, exclusion=exclusion,
                     w_over_L=w_over_l, knot=knot, polish=polish)
     with ReplicaProgress(f"relax {problem.knot_name}", replicas, disable=json_) as bars:
@@ -214,6 +247,10 @@ def relax(
               f"({d['shape']}, {width.text}); "
               + ("converged: " if res.converged else "NOT converged: ") + res.convergence,
               markup=False, highlight=False)
+    note = res.best.observables.get("shape_note") if res.replicas else None
+    if note:  # --w-over-L thinner than the shape analysis sees: one plain line
+        out.print(f"note: its shape was read at the tube's diameter, where {note}",
+                  markup=False, highlight=False, soft_wrap=True)
     if out_path is not None:
         out.print(f"results in {out_path}/", markup=False, highlight=False)
     finish(res, replicas)

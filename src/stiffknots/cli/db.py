@@ -34,7 +34,7 @@ def _width(exclusion: str, thickness: float, beads: int, key: str = "text") -> s
 def _open(ctx: typer.Context):
     from stiffknots.store import Store
 
-    return Store(ctx.obj["db"], create=False)
+    return Store(ctx.obj["db"], readonly=True)  # a query writes nothing
 
 
 @db_app.callback()

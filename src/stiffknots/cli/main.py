@@ -4,6 +4,7 @@ code 2, Ctrl-C → exit 130, ``kill PID`` (SIGTERM) → the same stop as Ctrl-C 
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import sys
@@ -36,6 +37,9 @@ from stiffknots.errors import (
     UserInputError,
     WorkerError,
 )
+
+#: errors of the machine's storage (not of stiffknots): one line and exit code 1
+_STORAGE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG, errno.EIO}
 
 # the commands, in the order `stiffknots --help` lists them
 for _name, _command in (
@@ -88,6 +92,27 @@ def _note_cold_cache() -> None:
                          "`stiffknots warmup` does it ahead) ...")
 
 
+#: commands whose first argument is a knot name
+_KNOT_COMMANDS = {"anneal", "open", "tightest", "thin-limit"}
+
+
+def _note_mirror() -> None:
+    """A knot named by its mirror image (``anneal m3_1``) is run as the catalogue's knot: say
+    so when the work starts (a misspelt name stays a one-line error)."""
+    args = [a for a in sys.argv[1:] if not a.startswith("-")]
+    if len(args) < 2 or args[0] not in _KNOT_COMMANDS:
+        return
+    from stiffknots.errors import UnknownKnotError
+    from stiffknots.knots.catalogue import mirror_note
+
+    try:
+        note = mirror_note(args[1])
+    except UnknownKnotError:
+        return  # the command says it
+    if note:
+        work_starts_note(note)
+
+
 def _json_stdout_only() -> None:
     """With --json, standard output carries the JSON document and nothing else: file
     descriptor 1 is pointed at standard error for the whole command — compiled libraries
@@ -135,10 +160,34 @@ def _sigterm_as_interrupt() -> None:
         pass
 
 
+def _plain_warnings() -> None:
+    """A warning of stiffknots that reaches the command line (the analysis warns a user of
+    the Python API about a chain it reads) is one plain line, said once: not Python's two
+    lines naming a file of a library (typer's, where the command was called)."""
+    import warnings
+
+    from stiffknots.errors import StiffKnotsWarning
+
+    shown = warnings.showwarning
+    said: set[str] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, StiffKnotsWarning):
+            return shown(message, category, filename, lineno, file, line)
+        text = " ".join(str(message).split())
+        if text not in said:
+            said.add(text)
+            _say(f"warning: {text}")
+
+    warnings.showwarning = show
+
+
 def main() -> None:
     """Run the command line (the ``stiffknots`` script)."""
     _sigterm_as_interrupt()
+    _plain_warnings()
     _note_cold_cache()
+    _note_mirror()
     _json_stdout_only()
     try:
         _main()
@@ -172,6 +221,12 @@ def _main() -> None:
     except (typer.Abort, KeyboardInterrupt):
         _say("interrupted")
         raise SystemExit(130) from None
+    except OSError as e:  # a full disk, a read-only medium met while writing the results
+        if e.errno not in _STORAGE_ERRNOS:
+            raise
+        why = e.strerror or os.strerror(e.errno)
+        _say(f"error: cannot write {e.filename or 'the results'}: {why[:1].lower()}{why[1:]}")
+        raise SystemExit(1) from None
     except Exception as e:  # click usage errors (typer vendors click: no import of it here)
         if callable(getattr(e, "show", None)) and isinstance(getattr(e, "exit_code", None), int):
             if type(e).__name__ == "NoArgsIsHelpError" or not callable(

@@ -573,6 +573,50 @@ def _torus_lookup(original: str, p: int, q: int) -> Knot:
     return knot
 
 
+#: the mirror-image spellings of other tools: KnotInfo's and SnapPy's ``m`` prefix (``m3_1``),
+#: the star and the bang of knot tables and KnotPlot (``3_1*``, ``3_1!``), an ``m`` suffix
+#: (``3_1m``), ``mirror(3_1)``
+_MIRROR = (re.compile(r"mirror[(\[]?(.+?)[)\]]?"), re.compile(r"m[_\-]?([\dkt].*)"),
+           re.compile(r"(.+?)(?:\*|!)"), re.compile(r"(.+?\d)[_\-]?m"))
+
+
+def _mirror_base(key: str) -> str | None:
+    """The name inside a mirror spelling (:data:`_MIRROR`) of ``key`` (lower case, no
+    white space); None if ``key`` is not one."""
+    for pattern in _MIRROR:
+        m = pattern.fullmatch(key)
+        if m and m.group(1):
+            return m.group(1)
+    return None
+
+
+def mirror_of(name: str) -> str | None:
+    """The knot's canonical name if ``name`` spells a mirror image (``'m3_1'``, ``'3_1*'``,
+    ``'3_1m'``), else None. A knot and its mirror image are one entry of the catalogue:
+    KnotInfo lists one chirality per knot type and the bending energy, its bounds and its
+    ground states do not depend on chirality (a mirror maps a chain to one of the same ε).
+
+    Raises
+    ------
+    UnknownKnotError
+        If the name inside the mirror spelling is not a knot.
+    """
+    if not isinstance(name, str):
+        return None
+    base = _mirror_base(re.sub(r"\s+", "", name).lower())
+    return None if base is None else get_knot(base).name
+
+
+def mirror_note(name: str) -> str | None:
+    """One line saying that ``name`` is read as its mirror image's knot (None if it is no
+    mirror spelling)."""
+    base = mirror_of(name)
+    if base is None:
+        return None
+    return (f"{name.strip()} is the mirror image of {base}: the same knot here (ε, its bounds "
+            "and ground states do not depend on the mirror)")
+
+
 def get_knot(name: str) -> Knot:
     """Look up a knot by name.
 
@@ -589,7 +633,9 @@ def get_knot(name: str) -> Knot:
           the same knot type here) — the prime knot that is that torus knot, e.g. T(3,4) is
           8_19; T(1,q) is the unknot;
         * aliases: ``'unknot'``, ``'trefoil'``, ``'figure-eight'``, ``'figure8'``,
-          ``'cinquefoil'``, ``'three-twist'``, ``'stevedore'``.
+          ``'cinquefoil'``, ``'three-twist'``, ``'stevedore'``;
+        * any of these as a mirror image (:func:`mirror_of`): ``'m3_1'``, ``'3_1*'``,
+          ``'3_1m'``, ``'3_1!'``, ``'mirror(3_1)'`` — the same knot here.
 
     Returns
     -------
@@ -608,6 +654,14 @@ def get_knot(name: str) -> Knot:
     key = re.sub(r"\s+", "", name).lower()
     if not key:
         raise UnknownKnotError("empty knot name; examples: 3_1, 4_1, 11a_1, T(2,5), trefoil")
+
+    base = _mirror_base(key)
+    if base is not None:
+        try:
+            return get_knot(base)
+        except UnknownKnotError as exc:
+            raise UnknownKnotError(f"{exc} (read {name!r} as the mirror image of {base!r})"
+                                   ) from None
 
     alias = re.sub(r"[\s_\-'’.]", "", key)
     if alias in _ALIASES:

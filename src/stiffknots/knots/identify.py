@@ -61,6 +61,11 @@ table, which matches KnotInfo's for some knots and not for others (measured in t
 
 Open chains (paper §VIII, straight tails along z) are closed by
 :func:`close_open_chain_along_z` before identification.
+
+A polygon of :data:`CHILD_FROM` vertices or more is identified in a forked child process:
+topoly's compiled reduction takes seconds to minutes there, and a signal that arrives while
+compiled code runs waits for it; the caller waits for the child instead, and Ctrl-C or
+``kill PID`` stop it at once (the child is killed).
 """
 
 from __future__ import annotations
@@ -95,6 +100,14 @@ __all__ = [
 # exponentially with the crossings of the reduced diagram
 _MAX_CROSS = 60
 _LOCK = threading.Lock()
+
+#: from this many vertices the invariants are computed in a forked child (module docstring)
+CHILD_FROM = 2_000
+_IN_CHILD = [False]  # True in such a child: it computes in place
+
+
+def _big(x) -> bool:
+    return len(x) >= CHILD_FROM and hasattr(os, "fork") and not _IN_CHILD[0]
 
 
 # --------------------------------------------------------------------------------------------
@@ -304,7 +317,7 @@ def homfly_code(
     socket takes that number — the next call then closes a live connection (seen as "Bad file
     descriptor" in the worker's heartbeats). ``_keep_stdin()`` alone cannot close that race.
     """
-    if _threaded():
+    if _threaded() or _big(coords):
         return _in_child(lambda: _homfly_code(coords, closed, max_cross=max_cross,
                                               n_directions=n_directions))
     return _homfly_code(coords, closed, max_cross=max_cross, n_directions=n_directions)
@@ -314,15 +327,49 @@ def _threaded() -> bool:
     return hasattr(os, "fork") and threading.active_count() > 1
 
 
+#: forks of :func:`_in_child`, one at a time (two threads checking knots at once)
+_FORK_LOCK = threading.Lock()
+#: the process that is forking in :func:`_in_child` (None: none is)
+_FORKING: list[int | None] = [None]
+
+
+def _fork_quiet_hook(unraisable) -> None:
+    """``sys.unraisablehook`` of a process that forks in :func:`_in_child`: in such a child,
+    until its own code runs, an error of an after-fork handler is not reported. Python's own
+    (``threading._after_fork``) re-initialises the locks of the parent's other threads, which
+    the child does not have, and can fail at it in a process with several threads ("SystemError
+    … _thread.RLock", tracebacks on the user's stderr with two ``sk.anneal`` calls in two
+    threads); the child runs topoly alone and leaves by ``os._exit``. Everything else goes to
+    the hook that was there before."""
+    if _FORKING[0] is not None and os.getpid() != _FORKING[0]:
+        return
+    _PREVIOUS_HOOK[0](unraisable)
+
+
+_PREVIOUS_HOOK: list = [None]
+
+
 def _in_child(fn):
     """``fn()`` in a forked child process; its result (or exception) comes back pickled
-    through a pipe. The child runs nothing but ``fn`` and leaves by ``os._exit``."""
+    through a pipe. The child runs nothing but ``fn`` and leaves by ``os._exit``; what its
+    after-fork handlers report is not shown (:func:`_fork_quiet_hook`)."""
     import pickle
+    import sys
 
-    r, w = os.pipe()
-    pid = os.fork()
+    with _FORK_LOCK:
+        if sys.unraisablehook is not _fork_quiet_hook:
+            _PREVIOUS_HOOK[0], sys.unraisablehook = sys.unraisablehook, _fork_quiet_hook
+        r, w = os.pipe()
+        _FORKING[0] = os.getpid()
+        try:
+            pid = os.fork()
+        finally:
+            if os.getpid() == _FORKING[0]:  # the parent (the child keeps it: its hook)
+                _FORKING[0] = None
     if pid == 0:  # pragma: no cover (the child)
         code = 0
+        _FORKING[0] = None  # the child's own errors are reported again
+        _IN_CHILD[0] = True
         try:
             os.close(r)
             try:
@@ -342,10 +389,17 @@ def _in_child(fn):
             os._exit(code)
     os.close(w)
     chunks = []
-    with os.fdopen(r, "rb") as f:
-        while chunk := f.read(1 << 16):
-            chunks.append(chunk)
-    _, status = os.waitpid(pid, 0)
+    try:
+        with os.fdopen(r, "rb") as f:
+            while chunk := f.read(1 << 16):
+                chunks.append(chunk)
+        _, status = os.waitpid(pid, 0)
+    except BaseException:  # Ctrl-C, kill PID (KeyboardInterrupt): the child stops too
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+        with contextlib.suppress(OSError):
+            os.waitpid(pid, 0)
+        raise
     if not chunks:
         raise IdentificationError(
             f"the HOMFLY-PT computation died (child status {status}): topoly crashed")
@@ -603,13 +657,19 @@ def identify_details(coords, closed: bool = True) -> KnotNaming:
     IdentificationError
         If the HOMFLY-PT polynomial cannot be computed (far too many crossings).
     ValueError
-        If the polygon meets itself (no knot type).
+        If the polygon meets itself (no knot type):
+        :class:`~stiffknots.knots.singular.SingularCurveError`.
     """
     from stiffknots.knots import exterior as ex
+    from stiffknots.knots.singular import refuse_singular, rescaled
 
-    x = np.asarray(coords, dtype=np.float64)
+    # a knot type is scale invariant, floating point is not: 1e300 overflowed to 0_1
+    x = rescaled(np.asarray(coords, dtype=np.float64))
     if not closed:
         x = close_open_chain_along_z(x)
+    refuse_singular(x)  # its projection would resolve the crossing either way
+    if _big(x):  # minutes of compiled code: in a child, the caller stays stoppable
+        return _in_child(lambda: identify_details(x, closed=True))
     homfly = identify(x, closed=True)
     steps = ["HOMFLY-PT polynomial (topoly)"]
     if homfly == "unknown":

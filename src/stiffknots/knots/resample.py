@@ -47,9 +47,11 @@ from scipy.optimize import brentq
 from stiffknots.chain import Chain, as_coords
 from stiffknots.errors import InvalidParameter, TopologyChangedError
 from stiffknots.geometry import seg_dist2
+from stiffknots.knots.singular import refuse_singular, rescaled
 from stiffknots.width import Width
 
-__all__ = ["resample", "minimal_resample_beads", "separation_distance", "ResampleError"]
+__all__ = ["resample", "minimal_resample_beads", "separation_distance", "ResampleError",
+           "CurveError"]
 
 
 #: the most beads :func:`minimal_resample_beads` tries for a curve in :func:`resample`'s errors
@@ -58,6 +60,19 @@ RESAMPLE_LIMIT = 20_000
 
 class ResampleError(InvalidParameter):
     """``n_beads`` too small for the curve (the message names the smallest that works)."""
+
+
+class CurveError(ResampleError):
+    """No number of beads keeps the curve's knot type: its strands touch. The message names
+    the curve, not ``n_beads`` (a command line would otherwise blame its ``--beads``); still
+    a :class:`ResampleError` for the callers that skip a curve that does not resample."""
+
+    def __init__(self, text: str):
+        self.text = text
+        super().__init__("n_beads", None, "a number of beads that keeps the knot type", text)
+
+    def message(self, name: str) -> str:
+        return self.text
 
 
 # --------------------------------------------------------------------------------------------
@@ -76,9 +91,9 @@ def _closed_coords(chain) -> np.ndarray:
         x = x[:-1]
     if len(x) < 3:
         raise ValueError(f"a closed polygon needs at least 3 vertices, got {len(x)}")
-    lengths = np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)
-    if np.any(lengths == 0.0):
-        k = int(np.argmin(lengths))
+    zero = ~np.any(np.roll(x, -1, axis=0) - x, axis=1)  # no norm: 1e300 overflowed
+    if np.any(zero):
+        k = int(np.argmax(zero))
         raise ValueError(f"edge {k} of the polygon has zero length")
     return np.ascontiguousarray(x)
 
@@ -397,14 +412,22 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
     # the tube's rule everywhere (:class:`~stiffknots.width.Width`): w/L in (0, 1/8], w < 1
     width = None if w_over_L is None else Width.tube(n, w_over_L=w_over_L)
     x = _closed_coords(chain)
+    source = chain.meta.get("source") if isinstance(chain, Chain) else None
+    where = f"{source}: " if source else ""
+    refuse_singular(x, source=source)  # no --beads can keep a knot type it has not
+    # at order 1 (exactly: a power of two); ``unit`` takes lengths back to the input's units
+    big = float(np.max(np.abs(x)))
+    x = rescaled(x)
+    unit = big / float(np.max(np.abs(x)))
     b = np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)
     if len(x) == n and np.ptp(b) <= 1e-10 * b.mean():
         # already N equal bonds (e.g. a chain of stiffknots in any unit): a uniform scaling
         # is an isotopy, nothing to resample
         out = Chain((x - x.mean(axis=0)) / b.mean(), True,
                     dict(chain.meta) if isinstance(chain, Chain) else {})
-        out.meta.update({"resampled_from": n, "chord": float(b.mean()),
-                         "scale": float(1 / b.mean()), "thickness": out.min_segment_distance()})
+        out.meta.update({"resampled_from": n, "chord": float(b.mean()) * unit,
+                         "scale": float(1 / b.mean()) / unit,
+                         "thickness": out.min_segment_distance()})
         if width is not None:
             out.meta.update({"w_over_L": width.w_over_L, "w": width.thickness,
                              "tube_fits": bool(out.meta["thickness"] >= width.thickness)})
@@ -420,16 +443,16 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
                 raise ValueError("strands (nearly) touch")
             need = minimal_resample_beads(x, start=n, limit=RESAMPLE_LIMIT)
         except ValueError:  # none up to the limit: strands (nearly) touch
-            raise ResampleError(
-                "n_beads", n, "a number of beads that certifies this curve's knot type (none "
-                f"up to {RESAMPLE_LIMIT:,} does)",
-                note=f"two non-neighbouring parts of the curve come within {D:.2g} of each "
-                     "other (touching strands)") from None
+            raise CurveError(
+                f"{where}two non-neighbouring parts of the curve come within {D * unit:.2g} of "
+                "each other (touching strands): no number of beads up to "
+                f"{RESAMPLE_LIMIT:,} keeps its knot type certified; move the strands apart"
+            ) from None
         raise ResampleError(
             "n_beads", n, f"an integer >= {need} for this curve",
-            note=f"the arcs between beads ({a_max:.4g}) must be shorter than the distance "
-                 f"between non-neighbouring parts of the curve ({D:.4g}) for the knot type to "
-                 "be kept")
+            note=f"the arcs between beads ({a_max * unit:.4g}) must be shorter than the "
+                 f"distance between non-neighbouring parts of the curve ({D * unit:.4g}) for "
+                 "the knot type to be kept")
     if certify and ok and not _certify(x, cum, s, n):
         raise ResampleError(
             "n_beads", n, f"an integer > {n} for this curve",
@@ -452,8 +475,8 @@ def resample(chain, n_beads: int, *, w_over_L: float | None = None, check: bool 
         raise ValueError(f"bonds not unit after resampling (max error "
                          f"{np.max(np.abs(bonds - 1.0)):.2e})")
     src_meta = dict(chain.meta) if isinstance(chain, Chain) else {}
-    meta = {**src_meta, "resampled_from": len(x), "chord": float(ell), "scale": float(1 / ell),
-            "a_max": a_max, "D_2l": D}
+    meta = {**src_meta, "resampled_from": len(x), "chord": float(ell) * unit,
+            "scale": float(1 / ell) / unit, "a_max": a_max * unit, "D_2l": D * unit}
     out = Chain(y, True, meta)
     thick = out.min_segment_distance()
     out.meta["thickness"] = thick

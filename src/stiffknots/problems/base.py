@@ -54,7 +54,7 @@ from stiffknots.engine.driver import (
 )
 from stiffknots.engine.langevin import run_langevin_replica
 from stiffknots.engine.tempering import run_tempering
-from stiffknots.errors import TopologyChangedError
+from stiffknots.errors import TopologyChangedError, UserInputError
 from stiffknots.fileio import write_bytes, write_json
 from stiffknots.formats import save
 from stiffknots.problems import validate as V
@@ -152,13 +152,29 @@ def observe_shape(r: Replica, params) -> None:
     """Classify a closed replica's chain (:func:`stiffknots.analysis.classify`, §VII) with the
     exclusion distance of its run; store ``shape`` ('CB2', '4C', '80', 'other'), ``label``,
     ``multiplicity``, ``shape_reason`` and ``structure`` (its contact structure named, §V B:
-    :func:`stiffknots.analysis.structure_name`) in its observables."""
-    from stiffknots.analysis import classify
+    :func:`stiffknots.analysis.structure_name`) in its observables.
 
-    s = classify(r.coords, d=params.w if params.exclusion == "tube" else params.d)
+    The analysis warns a user who reads a chain where it cannot see every contact (a tube much
+    thinner than a bond); here the run itself reads it, with its own width: the warning is
+    kept as ``shape_note`` (for a command to say in one plain line where the user chose that
+    width), not shown as a Python warning in the middle of the output."""
+    import warnings
+
+    from stiffknots.analysis import classify
+    from stiffknots.errors import ChainWarning
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always", ChainWarning)
+        s = classify(r.coords, d=params.w if params.exclusion == "tube" else params.d)
+    for w in seen:
+        if not issubclass(w.category, ChainWarning):  # not ours: as it came
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    notes = [str(w.message) for w in seen if issubclass(w.category, ChainWarning)]
     r.observables.update(shape=f"CB{s.multiplicity}" if s.label == "CB" else s.label,
                          label=s.label, multiplicity=s.multiplicity, shape_reason=s.reason,
                          structure=s.structure.get("name"))
+    if notes:
+        r.observables["shape_note"] = notes[0]
 
 
 def knot_code(coords: np.ndarray, closed: bool = True) -> str:
@@ -358,12 +374,25 @@ class ReplicaSet:
                 "replica": r.replica, "epsilon": r.epsilon, "version": self.version,
                 "settings": self.settings}
 
-    def save(self, out: str | Path) -> dict[str, Path]:
+    def save(self, out: str | Path, overwrite: bool = False) -> dict[str, Path]:
         """Write ``best.xyz``/``best.json``, ``replica_K.xyz`` for every replica,
-        ``traces.npz`` and, last, ``result.json`` into ``out`` (each file atomically)."""
+        ``traces.npz`` and, last, ``result.json`` into ``out`` (each file atomically).
+
+        A folder that holds another run's results (any of these names) is refused — a
+        :class:`~stiffknots.errors.UserInputError`, as the command line refuses its
+        ``--out`` — unless ``overwrite``: the files of the same names are then replaced (a
+        ``replica_K.xyz`` of a larger earlier run stays)."""
+        import fnmatch
         import io
+        import os
 
         out = Path(out)
+        if not overwrite and out.is_dir():
+            old = sorted(n for n in os.listdir(out) if n in _RESULT_NAMES
+                         or fnmatch.fnmatchcase(n, "replica_*.xyz"))
+            if old:
+                raise UserInputError(f"{out} holds the results of another run ({old[0]}); "
+                                     "choose another folder or pass overwrite=True")
         out.mkdir(parents=True, exist_ok=True)
         paths: dict[str, Path] = {}
         for r in self.replicas:
@@ -381,6 +410,10 @@ class ReplicaSet:
             paths["traces"] = write_bytes(out / "traces.npz", buf.getvalue())
         paths["result"] = write_json(out / "result.json", self.to_dict())
         return paths
+
+
+#: what :meth:`ReplicaSet.save` writes besides ``replica_K.xyz``
+_RESULT_NAMES = ("result.json", "best.xyz", "best.json", "traces.npz")
 
 
 class Problem:

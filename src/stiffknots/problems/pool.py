@@ -210,14 +210,18 @@ class WorkerPool:
         return results, False
 
     def close(self) -> None:
-        """Stop the workers (at once: a running job is killed) and release the queue."""
-        if self._ex is not None:
-            _terminate(self._ex)
-            self._ex = None
-        if self._q is not None:  # not drained: a worker killed mid-write leaves half a record
-            self._q.close()
-            self._q = None
+        """Stop the workers (at once: a running job is killed) and release the queue; once
+        (a Ctrl-C during the stop is raised when the stop is complete, and a second close
+        finds nothing left to stop)."""
+        ex, self._ex = self._ex, None
+        q, self._q = self._q, None
         self.dead = True
+        try:
+            if ex is not None:
+                _terminate(ex)
+        finally:
+            if q is not None:  # not drained: a worker killed mid-write leaves half a record
+                q.close()
 
 
 def run_jobs(job: Callable[..., Any], arg_list: Sequence[tuple], workers: int,
@@ -310,16 +314,26 @@ def _quiet_wakeup(ex: ProcessPoolExecutor) -> None:
 
 
 def _terminate(ex: ProcessPoolExecutor) -> None:
-    """Stop the pool now: cancel what has not started, kill the running workers."""
-    procs = list(getattr(ex, "_processes", {}).values())
+    """Stop the pool now: cancel what has not started, kill the running workers.
+
+    Every step is done even when Ctrl-C (or ``kill PID``) arrives in the middle: the
+    interrupt is raised once the pool is stopped. (A Ctrl-C there left the executor shut down
+    with workers alive, and the caller's next close met the shut-down executor: "AttributeError:
+    'NoneType' object has no attribute 'values'".)"""
+    procs = list((getattr(ex, "_processes", None) or {}).values())
     _quiet_wakeup(ex)
-    ex.shutdown(wait=False, cancel_futures=True)
-    for p in procs:
-        with contextlib.suppress(Exception):
-            p.terminate()
-    for p in procs:
-        with contextlib.suppress(Exception):
-            p.join(5)
+    steps = [lambda: ex.shutdown(wait=False, cancel_futures=True),
+             *(p.terminate for p in procs), *((lambda p=p: p.join(5)) for p in procs)]
+    interrupt: BaseException | None = None
+    for step in steps:
+        for _ in range(3):  # a step a Ctrl-C cut short is done again
+            try:
+                step()
+                break
+            except KeyboardInterrupt as exc:
+                interrupt = exc
+            except Exception:  # noqa: BLE001 (a worker already gone)
+                break
     # and let the executor's manager thread finish before anything else happens: an error
     # that ended the interpreter while it still ran (a usage error found just after the pool
     # started, on a cold start) raced its atexit wake-up against the closing of its pipe
@@ -328,3 +342,5 @@ def _terminate(ex: ProcessPoolExecutor) -> None:
     if mgr is not None:
         with contextlib.suppress(Exception):
             mgr.join(5)
+    if interrupt is not None:
+        raise interrupt

@@ -77,6 +77,7 @@ def prepare_curve(chain: Chain, width: Width, knot: str | Knot | None
     """
     from stiffknots.knots.identify import identify_details, normalize_name
     from stiffknots.knots.resample import resample
+    from stiffknots.knots.singular import refuse_singular
 
     if not chain.closed:
         raise UserInputError("relax takes a closed curve (a knot); for an open knot under "
@@ -84,6 +85,7 @@ def prepare_curve(chain: Chain, width: Width, knot: str | Knot | None
     beads = width.beads
     if knot is not None:
         knot = _knot_name(knot)
+    refuse_singular(chain.coords, source=chain.meta.get("source"))  # the curve is at fault
     naming = identify_details(chain.coords, closed=True).as_dict()
     name = naming.get("knot")
     if knot is not None:

@@ -32,6 +32,7 @@ for; nothing is written back.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -89,6 +90,38 @@ _KEY_WHERE = ("knot = ? AND exclusion = ? AND beads = ? AND thickness_key = ? AN
               "AND replica = ? AND settings_hash = ?")
 
 
+def _os_error(fn) -> str | None:
+    """The operating system's words for why ``fn()`` failed; None if it did not."""
+    try:
+        fn()
+    except OSError as e:
+        return e.strerror or type(e).__name__
+    return None
+
+
+def _probe(folder: Path) -> None:
+    """Create and remove a file in ``folder`` (the -wal and -shm files go there)."""
+    probe = folder / f".stiffknots-probe-{os.getpid()}"
+    os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+    os.unlink(probe)
+
+
+def _open_for(path: Path, doing: str) -> None:
+    """Open the database file as SQLite would (and, for writing, its folder): an OSError
+    names what stands in the way."""
+    with open(path, "r+b" if doing == "writing" else "rb"):
+        pass
+    if doing == "writing":
+        _probe(path.parent)
+
+
+def _no_space(path: Path) -> bool:
+    try:
+        return os.statvfs(path.parent).f_bavail == 0
+    except OSError:
+        return False
+
+
 def _key_params(key: ReplicaKey) -> tuple:
     return (key.knot, key.exclusion, key.beads, key.thickness_key, key.seed, key.replica,
             key.settings_hash)
@@ -129,14 +162,19 @@ class Store:
     create : bool, default True
         Create the database if the file does not exist; False: raise :class:`StoreError`
         (for read-only tools that must not leave an empty database behind).
+    readonly : bool, default False
+        Open for reading only (queries): nothing is written, not even the schema into an
+        empty file; a database on read-only media opens too. Implies ``create=False``.
     timeout : float, default 60
         Seconds a write waits for other writers (``busy_timeout``).
 
     Raises
     ------
     StoreError
-        Not an SQLite file, not a stiffknots database, missing (``create=False``), or a file
-        system without WAL support.
+        Not an SQLite file, not a stiffknots database, missing or empty (``create=False``), a
+        file system without WAL support, or a file that cannot be opened for writing (or, with
+        ``readonly``, for reading): the message says why in the operating system's words
+        (read-only file system, operation not permitted, no space left on device).
     SchemaVersionError
         Written with another schema version.
 
@@ -148,9 +186,10 @@ class Store:
     """
 
     def __init__(self, path: str | os.PathLike | None = None, *, create: bool = True,
-                 timeout: float = 60.0) -> None:
+                 timeout: float = 60.0, readonly: bool = False) -> None:
         self._path = Path(DEFAULT_PATH if path is None else path)
-        self._create = bool(create)
+        self._readonly = bool(readonly)
+        self._create = bool(create) and not self._readonly
         self._timeout = float(timeout)
         self._lock = threading.RLock()
         self._abandoned: list[sqlite3.Connection] = []
@@ -175,26 +214,109 @@ class Store:
                     if f.read(16) != _SQLITE_MAGIC:
                         raise StoreError(f"{path} is not an SQLite database (not a stiffknots "
                                          f"results file); give another --db path")
+            elif not self._create:  # a query must not write the schema into it
+                raise StoreError(f"{path} is empty: no results database yet (run a sweep "
+                                 f"first, or give the right --db path)")
         elif not self._create:
             raise StoreError(f"no results database at {path} (run a sweep first, or give the "
                              f"right --db path)")
         else:
             path.parent.mkdir(parents=True, exist_ok=True)
+        if self._readonly:
+            return self._connect_readonly()
+        created = not path.exists()
         try:
             con = sqlite3.connect(str(path), timeout=self._timeout, isolation_level=None,
                                   check_same_thread=False)
         except sqlite3.Error as e:
-            raise StoreError(f"cannot open the results database {path}: {e}") from None
+            raise self._cannot("writing", e) from None
         try:
             con.execute(f"PRAGMA busy_timeout = {int(self._timeout * 1000)}")
             self._setup(con)
+            # a database that opens but cannot be written (a read-only or immutable file, an
+            # existing schema: nothing was written yet) fails here, not at its first row
+            con.execute("BEGIN IMMEDIATE")
+            try:
+                con.execute("UPDATE meta SET value = value WHERE key = 'schema_version'")
+            finally:
+                con.execute("ROLLBACK")
         except sqlite3.DatabaseError as e:
             con.close()
-            raise StoreError(f"{path} is not a usable SQLite database: {e}") from None
+            self._forget(created)
+            raise self._cannot("writing", e) from None
         except BaseException:
             con.close()
+            self._forget(created)
             raise
         return con
+
+    def _forget(self, created: bool) -> None:
+        """A database this open created and could not set up (a full disk): its files go,
+        not an empty database and 0-byte -wal and -shm files. Only while the file is still
+        empty (never a database another process has written meanwhile)."""
+        try:
+            if not created or self._path.stat().st_size > 0:
+                return
+            self._path.unlink()
+        except OSError:
+            return
+        for suffix in ("-wal", "-shm", "-journal"):
+            with contextlib.suppress(OSError):
+                os.unlink(f"{self._path}{suffix}")
+
+    def _connect_readonly(self) -> sqlite3.Connection:
+        """A connection that reads only (``mode=ro``). A WAL database on read-only media
+        without its ``-shm`` file cannot be opened so: nothing can change it there, and it is
+        opened as immutable."""
+        from urllib.parse import quote
+
+        path = self._path
+        uri = f"file:{quote(str(path.resolve()))}?mode=ro"
+        con = None
+        try:
+            try:
+                con = sqlite3.connect(uri, uri=True, timeout=self._timeout,
+                                      isolation_level=None, check_same_thread=False)
+                version = self._schema_version(con)
+            except sqlite3.OperationalError:
+                if con is not None:
+                    con.close()
+                if _os_error(lambda: _probe(path.parent)) is None:
+                    raise  # a writable folder: not the read-only media case
+                con = sqlite3.connect(uri + "&immutable=1", uri=True, timeout=self._timeout,
+                                      isolation_level=None, check_same_thread=False)
+                version = self._schema_version(con)
+            con.execute(f"PRAGMA busy_timeout = {int(self._timeout * 1000)}")
+        except sqlite3.DatabaseError as e:
+            if con is not None:
+                con.close()
+            raise self._cannot("reading", e) from None
+        except BaseException:
+            if con is not None:
+                con.close()
+            raise
+        if version is None:
+            con.close()
+            raise StoreError(f"{path} holds no results database yet (no tables); run a sweep "
+                             "first, or give the right --db path")
+        if version != SCHEMA_VERSION:
+            con.close()
+            self._check_version(version)
+        return con
+
+    def _cannot(self, doing: str, e: sqlite3.Error) -> StoreError:
+        """The error of a database that SQLite could not open or set up: why, in the words of
+        the operating system where it has them (a read-only file system, an immutable file, no
+        space left on the device), else SQLite's (a damaged file)."""
+        path = self._path
+        why = _os_error(lambda: _open_for(path, doing))
+        if why is not None or (doing == "writing" and _no_space(path)):
+            return StoreError(f"{path}: cannot open the results database for {doing} "
+                              f"({why or 'No space left on device'}; SQLite: {e})")
+        text = str(e).lower()
+        if any(w in text for w in ("readonly", "unable to open", "disk is full", "disk i/o")):
+            return StoreError(f"{path}: cannot open the results database for {doing} ({e})")
+        return StoreError(f"{path} is not a usable SQLite database: {e}")
 
     def _setup(self, con: sqlite3.Connection) -> None:
         """WAL mode, the pragmas and the schema. Switching a new file to WAL and creating the
@@ -259,6 +381,9 @@ class Store:
                 if con.in_transaction:
                     con.execute("ROLLBACK")
                 raise
+        self._check_version(version)
+
+    def _check_version(self, version: int) -> None:
         if version != SCHEMA_VERSION:
             newer = version > SCHEMA_VERSION
             raise SchemaVersionError(
@@ -307,6 +432,17 @@ class Store:
             try:
                 yield con
                 con.execute("COMMIT")
+            except sqlite3.OperationalError as e:
+                with contextlib.suppress(sqlite3.Error):
+                    if con.in_transaction:
+                        con.execute("ROLLBACK")
+                text = str(e).lower()
+                if "full" in text or "readonly" in text or "disk i/o" in text:
+                    why = "no space left on the device" if "full" in text else str(e)
+                    raise StoreError(f"{self._path}: cannot write the results database ({why}; "
+                                     f"SQLite: {e}): this row was not stored, the rows stored "
+                                     "before are kept") from None
+                raise
             except BaseException:
                 if con.in_transaction:
                     con.execute("ROLLBACK")

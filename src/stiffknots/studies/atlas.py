@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from stiffknots._version import __version__
-from stiffknots.fileio import write_json
+from stiffknots.fileio import replaced_entries, write_json
 from stiffknots.store import Store
 from stiffknots.sweeps import (
     CONVERGENCE_RULE,
@@ -418,6 +418,11 @@ def not_converged_text(counts: Mapping[str, Mapping]) -> str:
         for name, c in counts.items() if c["knots"]) or "no results stored yet"
 
 
+#: what an atlas writes into its folder (replaced whole by the next atlas written there)
+ATLAS_ENTRIES = ("index.html", "atlas.json", "families.json", "eps_vs_n2.png", "plotly.min.js",
+                 "knots", "thumbs")
+
+
 def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
               db: str | Path = DEFAULT_DB, out: str | Path = DEFAULT_OUT, seed: int = 0,
               scheduler: str | None = None, workers: int | None = None,
@@ -464,7 +469,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
 
     db, out = Path(db), Path(out)
     main = next((m.exclusion for m in models if m.exclusion == "bead"), models[0].exclusion)
-    with Store(db) as store:
+    # run=False only reads: an existing database opens read-only (read-only media too)
+    with Store(db, readonly=not run and db.is_file()) as store:
         sweep: SweepResult = run_sweep(knots, models, budget, store, seed=seed,
                                        scheduler=scheduler, workers=workers,
                                        max_replicas=max_replicas, listener=listener,
@@ -486,16 +492,21 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
                 "not converged": not_converged_text(counts),
                 "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                 **({"command": command} if command else {})}
-        html = write_atlas(out, [atlas_input(store, r) for r in recs],
-                           families=families_table(study), meta=meta, default_model=main,
-                           thumbnails=thumbnails)
+        # written aside and swapped in whole: a full disk or Ctrl-C leaves the earlier atlas,
+        # and no page of an earlier, larger atlas stays behind
+        with replaced_entries(out, ATLAS_ENTRIES, "atlas") as stage:
+            write_atlas(stage, [atlas_input(store, r) for r in recs],
+                        families=families_table(study), meta=meta, default_model=main,
+                        thumbnails=thumbnails)
+            fig = _plot_eps_n2(study, stage / "eps_vs_n2.png")
+            write_json(stage / "families.json", {
+                "version": __version__, "seed": seed, "budget": budget.as_dict(),
+                "settings": {m.exclusion: sweep_settings(m, budget) for m in models}, **study})
+    html = out / "index.html"
     files = {"html": str(html)}
-    fig = _plot_eps_n2(study, out / "eps_vs_n2.png")
     if fig is not None:
-        files["eps_vs_n2"] = str(fig)
-    files["families"] = str(write_json(out / "families.json", {
-        "version": __version__, "seed": seed, "budget": budget.as_dict(),
-        "settings": {m.exclusion: sweep_settings(m, budget) for m in models}, **study}))
+        files["eps_vs_n2"] = str(out / "eps_vs_n2.png")
+    files["families"] = str(out / "families.json")
     converged = {k: (c["converged"] / c["knots"] if c["knots"] else None)
                  for k, c in counts.items()}
     result.update({"html": str(html), "knots": entries, "families": study,

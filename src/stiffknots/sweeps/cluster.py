@@ -35,6 +35,8 @@ import functools
 import logging
 import os
 import re
+import shutil
+import tempfile
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -127,9 +129,11 @@ class IgnoreInterrupt(_WorkerPlugin):  # type: ignore[misc]
         _die_with_parent(os.getppid())  # a killed client (or nanny) takes its workers along
 
 
-def local_cluster(n_workers: int) -> Any:
+def local_cluster(n_workers: int, local_directory: str | None = None) -> Any:
     """A ``distributed.LocalCluster`` in this process: ``n_workers`` worker processes under
-    nannies, one thread each, HTTP on a free local port, no memory limit.
+    nannies, one thread each, HTTP on a free local port, no memory limit; their scratch
+    space (and its lock files) in ``local_directory`` (default: Dask's, a
+    ``dask-scratch-space`` folder in the system's temporary folder).
 
     The worker processes are *forked* from this one, which has imported ``distributed``
     safely (:func:`import_distributed`): a spawned process would import it afresh and stop on
@@ -139,10 +143,13 @@ def local_cluster(n_workers: int) -> Any:
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.worker.multiprocessing-method": "fork"}):
+    where = {} if local_directory is None else {"temporary-directory": local_directory}
+    with dask.config.set({"distributed.worker.multiprocessing-method": "fork", **where}):
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                             dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
-                            scheduler_port=0, memory_limit=0)
+                            scheduler_port=0, memory_limit=0,
+                            **({} if local_directory is None
+                               else {"local_directory": local_directory}))
 
 
 @contextlib.contextmanager
@@ -173,13 +180,22 @@ def connect(scheduler: str | None = None, workers: int | None = None,
     from distributed import Client
 
     cluster = None
+    scratch = None
     if scheduler is None:
-        cluster = local_cluster(local_workers(workers))
+        # the workers' scratch space in a folder of this run, removed with the cluster (Dask's
+        # default, /tmp/dask-scratch-space, kept its global.lock and purge.lock after every run)
+        scratch = tempfile.mkdtemp(prefix="stiffknots-dask-")
+        try:
+            cluster = local_cluster(local_workers(workers), local_directory=scratch)
+        except BaseException:
+            shutil.rmtree(scratch, ignore_errors=True)
+            raise
         try:
             client = Client(cluster)
             client.register_plugin(IgnoreInterrupt())
         except BaseException:
             cluster.close()
+            shutil.rmtree(scratch, ignore_errors=True)
             raise
     else:
         address = scheduler_address(scheduler)
@@ -196,6 +212,8 @@ def connect(scheduler: str | None = None, workers: int | None = None,
         if cluster is not None:
             with contextlib.suppress(Exception):
                 cluster.close(timeout=10)
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
 
 
 @functools.lru_cache(maxsize=8)
