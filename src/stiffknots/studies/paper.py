@@ -57,18 +57,19 @@ def _compare(state: dict) -> str:
     return "none of the paper's three shapes"
 
 
-def _anneal_model(name, model, b, seed):
+def _anneal_model(name, model, b, seed, pool=None):
     from stiffknots.analysis import classify, group_states
     from stiffknots.engine.params import MoveParams
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.knots.starts import STARTS, available_starts, split_replicas
-    from stiffknots.problems.closed import anneal
+    from stiffknots.problems.base import solve
+    from stiffknots.problems.closed import ClosedAnneal
 
     params = MoveParams(exclusion=model)
     starts = split_replicas(available_starts(get_knot(name), starts=STARTS), b["replicas"])
     # the budget fixes the replicas (shared among the starts): one round, no adaptive rounds
-    res = anneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed, params=params,
-                 start=starts, rounds=1)
+    res = solve(ClosedAnneal(name, moves=b["moves"], replicas=b["replicas"], seed=seed,
+                             params=params, start=starts, rounds=1), pool=pool)
     if res.interrupted:  # Ctrl-C stopped the replicas: the study stops, not just this knot
         raise KeyboardInterrupt
     d = params.w if model == "tube" else params.d
@@ -110,7 +111,9 @@ def run_paper(budget: str = "small", out_dir: str | Path = "results/paper", seed
     The summary has, per knot, ``ground`` (``shape``, ``multiplicity``, ``epsilon``, …) and
     ``metastable`` (a list) for the paper's bead rule, and the same under ``tube``.
     """
+    from stiffknots.engine.driver import default_workers
     from stiffknots.knots.summary import knot_summary
+    from stiffknots.problems.pool import WorkerPool
     from stiffknots.report.figures import (
         plot_annealing_curves,
         plot_elastica,
@@ -135,46 +138,49 @@ def run_paper(budget: str = "small", out_dir: str | Path = "results/paper", seed
         f"α = {c.alpha:.6f}")
     knots = {}
     eps_points = []
-    for name in PAPER_KNOTS:
-        th = knot_summary(name)
-        entry = {"knot": name, "n": th["bridge_number"], "i": th["braid_index"],
-                 "lower_bound": th["lower_bound"], "upper_bound": th["upper_bound"],
-                 "paper": PAPER_MC[name]}
-        for model in MODELS:
-            say(f"{name} ({model}): annealing {b['replicas']} × {b['moves']:,} moves …")
-            res, items, groups = _anneal_model(name, model, b, seed)
-            sub = out / name / model
-            res.save(sub)
-            states = [_state_dict(g, items) for g in groups.states]
-            for k, st in enumerate(states):
-                png = sub / f"state_{k}_{st['name'].replace('=', '').replace('(', '')}"
-                png = png.with_name(png.name.replace(")", "") + ".png")
-                save_chain_png(items[st["representative"]]["coords"], png, contacts=0.9,
-                               title=f"{name} ({model}): {st['name']}, ε = {st['eps_min']:.2f}")
-                st["picture"] = str(png.relative_to(out))
-            traces = [{"moves": r.trace_moves, "temperature": r.trace_temperature,
-                       "epsilon": r.trace_epsilon} for r in res.replicas]
-            fig = plot_annealing_curves(traces, labels=[f"replica {r.replica}"
-                                                        for r in res.replicas],
-                                        references={"ground": states[0]["eps_min"]})
-            save_figure(fig, sub / "annealing.png")
-            block = {"ground": states[0], "metastable": states[1:],
-                     "replica_epsilons": [r.epsilon for r in res.replicas],
-                     "knot_verified": all(r.knot_verified for r in res.replicas),
-                     "annealing_curves": str((sub / "annealing.png").relative_to(out)),
-                     "wall_time": res.wall_time, "settings": res.settings}
-            entry[model] = block
-            eps_points.append({"knot": name, "n": th["bridge_number"], "i": th["braid_index"],
-                               "epsilon": states[0]["eps_min"],
-                               "shape": f"{states[0]['name']} ({model})"})
-            say(f"  ground {states[0]['name']} ε = {states[0]['eps_min']:.3f} "
-                f"(×{states[0]['count']}); metastable: "
-                + (", ".join(f"{s['name']} {s['eps_min']:.2f} ×{s['count']}"
-                             for s in states[1:]) or "none"))
-        # the paper's rule is the headline; the tube model is the comparison
-        entry["ground"] = entry["bead"]["ground"]
-        entry["metastable"] = entry["bead"]["metastable"]
-        knots[name] = entry
+    # one pool of workers for the whole study: a fresh process costs seconds before its
+    # first move, and the study runs ten small annealings
+    with WorkerPool(default_workers(b["replicas"])).start() as pool:
+        for name in PAPER_KNOTS:
+            th = knot_summary(name)
+            entry = {"knot": name, "n": th["bridge_number"], "i": th["braid_index"],
+                     "lower_bound": th["lower_bound"], "upper_bound": th["upper_bound"],
+                     "paper": PAPER_MC[name]}
+            for model in MODELS:
+                say(f"{name} ({model}): annealing {b['replicas']} × {b['moves']:,} moves …")
+                res, items, groups = _anneal_model(name, model, b, seed, pool)
+                sub = out / name / model
+                res.save(sub)
+                states = [_state_dict(g, items) for g in groups.states]
+                for k, st in enumerate(states):
+                    png = sub / f"state_{k}_{st['name'].replace('=', '').replace('(', '')}"
+                    png = png.with_name(png.name.replace(")", "") + ".png")
+                    save_chain_png(items[st["representative"]]["coords"], png, contacts=0.9,
+                                   title=f"{name} ({model}): {st['name']}, ε = {st['eps_min']:.2f}")
+                    st["picture"] = str(png.relative_to(out))
+                traces = [{"moves": r.trace_moves, "temperature": r.trace_temperature,
+                           "epsilon": r.trace_epsilon} for r in res.replicas]
+                fig = plot_annealing_curves(traces, labels=[f"replica {r.replica}"
+                                                            for r in res.replicas],
+                                            references={"ground": states[0]["eps_min"]})
+                save_figure(fig, sub / "annealing.png")
+                block = {"ground": states[0], "metastable": states[1:],
+                         "replica_epsilons": [r.epsilon for r in res.replicas],
+                         "knot_verified": all(r.knot_verified for r in res.replicas),
+                         "annealing_curves": str((sub / "annealing.png").relative_to(out)),
+                         "wall_time": res.wall_time, "settings": res.settings}
+                entry[model] = block
+                eps_points.append({"knot": name, "n": th["bridge_number"], "i": th["braid_index"],
+                                   "epsilon": states[0]["eps_min"],
+                                   "shape": f"{states[0]['name']} ({model})"})
+                say(f"  ground {states[0]['name']} ε = {states[0]['eps_min']:.3f} "
+                    f"(×{states[0]['count']}); metastable: "
+                    + (", ".join(f"{s['name']} {s['eps_min']:.2f} ×{s['count']}"
+                                 for s in states[1:]) or "none"))
+            # the paper's rule is the headline; the tube model is the comparison
+            entry["ground"] = entry["bead"]["ground"]
+            entry["metastable"] = entry["bead"]["metastable"]
+            knots[name] = entry
     fig = plot_eps_vs_n2(eps_points)
     save_figure(fig, out / "eps_vs_n2.png")
     summary = {
