@@ -38,9 +38,11 @@ FORMAT_NAME = "stiffknots-chain"
 FORMAT_VERSION = 1
 
 
-def as_coords(coords: Any, name: str = "chain coordinates") -> np.ndarray:
+def as_coords(coords: Any, name: str = "chain coordinates", *, item: str = "bead",
+              first: int = 0) -> np.ndarray:
     """``coords`` (an array-like or a :class:`Chain`) as a C-contiguous float64 copy of shape
-    (N, 3) with finite values; ValueError naming ``name`` otherwise."""
+    (N, 3) with finite values; ValueError naming ``name`` otherwise (and the first point that is
+    not finite, as ``item`` numbered from ``first``)."""
     if hasattr(coords, "coords") and hasattr(coords, "closed"):
         coords = coords.coords
     try:
@@ -51,7 +53,7 @@ def as_coords(coords: Any, name: str = "chain coordinates") -> np.ndarray:
         raise ValueError(f"{name} must have shape (N, 3), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         bad = int(np.argwhere(~np.isfinite(arr))[0, 0])
-        raise ValueError(f"{name} must be finite; bead {bad} is {arr[bad].tolist()}")
+        raise ValueError(f"{name} must be finite; {item} {bad + first} is {arr[bad].tolist()}")
     return arr
 
 

@@ -94,7 +94,7 @@ import numpy as np
 
 from stiffknots._json import json_default
 from stiffknots._version import __version__
-from stiffknots.chain import FORMAT_NAME, FORMAT_VERSION, Chain
+from stiffknots.chain import FORMAT_NAME, FORMAT_VERSION, Chain, as_coords
 from stiffknots.errors import ChainFormatError
 from stiffknots.fileio import atomic_path
 
@@ -527,13 +527,10 @@ def from_npy(path: PathLike, closed: bool | None = None) -> Chain:
 
 
 def _coords_array(coords: np.ndarray, path: PathLike) -> np.ndarray:
-    x = np.asarray(coords, dtype=np.float64)
-    if x.ndim != 2 or x.shape[1] != 3:
-        raise ChainFormatError(f"{path}: coordinates must have shape (N, 3), got {x.shape}")
-    if not np.all(np.isfinite(x)):
-        bad = int(np.argwhere(~np.isfinite(x))[0, 0])
-        raise ChainFormatError(f"{path}: vertex {bad + 1} is not finite: {x[bad].tolist()}")
-    return x
+    try:
+        return as_coords(coords, f"{path}: coordinates", item="vertex", first=1)
+    except ValueError as exc:
+        raise ChainFormatError(str(exc)) from None
 
 
 def to_obj(chain: Chain, path: PathLike) -> None:

@@ -36,18 +36,11 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from stiffknots import sweeps
 from stiffknots._version import __version__
 from stiffknots.fileio import replaced_entries, write_json
 from stiffknots.store import Store
-from stiffknots.sweeps import (
-    CONVERGENCE_RULE,
-    Budget,
-    SweepListener,
-    SweepResult,
-    ensemble_converged,
-    run_sweep,
-    sweep_settings,
-)
+from stiffknots.sweeps import Budget, SweepListener, SweepResult
 from stiffknots.width import Width
 
 __all__ = ["DEFAULT_OUT", "DEFAULT_DB", "bead_above_tube", "knot_records", "atlas_input",
@@ -110,7 +103,7 @@ def _model_json(m: Width, st: Mapping | None) -> dict:
     if st is None:
         return {"width": width, "replicas": 0, "ground": None, "metastable": [],
                 "converged": False, "settings_hash": None}
-    conv = ensemble_converged(st)
+    conv = sweeps.ensemble_converged(st)
     return {"width": width, "replicas": st["replicas"], "settings_hash": st["settings_hash"],
             "converged": conv, "ground": _state_json(st["ground"], conv),
             "metastable": [_state_json(s, None) for s in st["metastable"]]}
@@ -173,7 +166,7 @@ def atlas_input(store: Store, rec: Mapping) -> dict:
         if st is None:
             continue
         radius = m.thickness / 2 if m.exclusion == "tube" else None
-        conv = ensemble_converged(st)
+        conv = sweeps.ensemble_converged(st)
 
         def state(s: Mapping, converged: bool | None, radius=radius, d=m.thickness) -> dict:
             x = store.coords(s["representative"])
@@ -273,7 +266,7 @@ def family_study(grounds: Mapping[str, Mapping | None], *, model: str, width: st
         row["paper"] = paper.get(row["label"])
     no_family = [r for r in per_knot if not r["families"]]
     return {
-        "model": model, "width": width, "rule": CONVERGENCE_RULE,
+        "model": model, "width": width, "rule": sweeps.CONVERGENCE_RULE,
         "catalogue": cov, "groups": groups, "knots": per_knot,
         "mismatch": [r for r in per_knot if r["as_predicted"] is False],
         "no_family": no_family,
@@ -471,7 +464,7 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
     main = next((m.exclusion for m in models if m.exclusion == "bead"), models[0].exclusion)
     # run=False only reads: an existing database opens read-only (read-only media too)
     with Store(db, readonly=not run and db.is_file()) as store:
-        sweep: SweepResult = run_sweep(knots, models, budget, store, seed=seed,
+        sweep: SweepResult = sweeps.run_sweep(knots, models, budget, store, seed=seed,
                                        scheduler=scheduler, workers=workers,
                                        max_replicas=max_replicas, listener=listener,
                                        run=run)
@@ -488,7 +481,7 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
         counts = converged_counts(entries, models)
         meta = {"budget": budget_text(budget, models, max_replicas),
                 "seed": seed, "models": "; ".join(m.text for m in models),
-                "database": str(db), "converged": CONVERGENCE_RULE,
+                "database": str(db), "converged": sweeps.CONVERGENCE_RULE,
                 "not converged": not_converged_text(counts),
                 "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                 **({"command": command} if command else {})}
@@ -501,7 +494,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
             fig = _plot_eps_n2(study, stage / "eps_vs_n2.png")
             write_json(stage / "families.json", {
                 "version": __version__, "seed": seed, "budget": budget.as_dict(),
-                "settings": {m.exclusion: sweep_settings(m, budget) for m in models}, **study})
+                "settings": {m.exclusion: sweeps.sweep_settings(m, budget) for m in models},
+                **study})
     html = out / "index.html"
     files = {"html": str(html)}
     if fig is not None:
