@@ -217,6 +217,7 @@ def test_help_texts_are_reflowed_paragraphs():
     assert "previous width and polished, corrected" in " ".join(out.split())
 
 
+@pytest.mark.slow
 def test_anneal_unconverged_bead_rule_points_to_the_tube_model():
     """An adaptive bead-rule run that ends without a verdict says why bead-rule searches rarely
     meet and names the tube model and the other engine; a tube run, or a fixed budget

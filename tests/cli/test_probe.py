@@ -791,8 +791,11 @@ def test_ctrl_c_during_an_overwrite_keeps_the_earlier_results(tmp_path):
     import time
 
     before = _earlier_results(tmp_path / "out")
+    # SIGINT at its default: a process started by a non-interactive shell or a test runner's
+    # worker may inherit it ignored (tests/cli/test_signals.py)
     p = subprocess.Popen([*CLI, "anneal", "4_1", "--out", str(tmp_path / "out"), "--overwrite"],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(6)
     p.send_signal(signal.SIGINT)
     _, stderr = p.communicate(timeout=120)
@@ -919,7 +922,8 @@ def test_ctrl_c_at_any_moment_of_an_anneal_ends_in_one_line(tmp_path):
 
     for delay in (1.0, 2.5, 4.0, 5.5, 7.0, 9.0, 12.0):
         p = subprocess.Popen([*CLI, "anneal", "4_1", "--rounds", "2"], cwd=tmp_path,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         time.sleep(delay)
         p.send_signal(signal.SIGINT)
         _, err = p.communicate(timeout=120)

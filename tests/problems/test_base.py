@@ -168,6 +168,7 @@ def test_an_easy_knot_converges_in_one_round():
     assert all(r.knot == "3_1" and r.observables["shape"] == "CB2" for r in res.replicas)
 
 
+@pytest.mark.slow
 def test_a_budget_too_small_cannot_converge():
     # 7_4 after 100,000 moves: every replica (polished to its local minimum) stops in a
     # different state; a second round adds replicas (new seeds, round-robin starts) and the

@@ -7,6 +7,8 @@ import math
 import subprocess
 import sys
 
+import pytest
+
 from stiffknots.studies.benchmark import TARGETS, _time_to_target, run_benchmarks
 
 
@@ -21,6 +23,7 @@ def test_time_to_target_counts_the_final_minimiser():
     assert r["seconds"] == r["wall_time"]
 
 
+@pytest.mark.slow
 def test_bench_small_budget_reads_well():
     p = subprocess.run([sys.executable, "-m", "stiffknots.cli", "bench", "--seconds-budget", "5"],
                        capture_output=True, text=True, timeout=600)
