@@ -100,8 +100,8 @@ def anneal(
              "option is given (--exclusion tube, --w, --w-over-L, --tube-route, "
              "--checkpoint, --relax-fraction, --delta, --m-max, --coarse); langevin "
              "(annealing by guarded Langevin dynamics of the whole chain, the peer LAMMPS's "
-             "search; bead rule: 33 of the 35 prime knots through 8 crossings converge, the "
-             "Monte Carlo's 23); geometric (the paper's Monte Carlo annealing, §VII, "
+             "search; for the bead rule it converges more often than the Monte Carlo, "
+             "docs/methods/search.md); geometric (the paper's Monte Carlo annealing, §VII, "
              "geometric cooling); power (the paper's power law; use it with --t-start "
              "3e-2); tempering (replica exchange).")] = "auto",
     t_start: Annotated[float | None, typer.Option(
@@ -124,8 +124,8 @@ def anneal(
         "--tube-route/--no-tube-route",
         help="Bead rule: new searches from the third round on anneal under the tube rule "
              "(w = d, whose chains the bead rule admits) and are then polished under the "
-             "bead rule; they confirm a state but do not certify it (measured: lower grounds "
-             "for some knots, higher for as many).")] = False,
+             "bead rule; they confirm a state but do not certify it (docs/methods/verdicts.md)."
+             )] = False,
     from_file: Annotated[str | None, typer.Option(
         "--from", help="Start every replica from the curve in this file (any format of "
                        "`stiffknots identify`; resampled to --beads unit bonds, knot type "
@@ -133,8 +133,8 @@ def anneal(
     coarse: Annotated[int | None, typer.Option(
         help="Coarse to fine: first anneal at this many beads (e.g. 150; two rounds, the "
              "same exclusion and seed), then start every replica from its lowest chain, "
-             "resampled to --beads. At large N a fresh search can miss the ground: 7_4, tube, "
-             "N = 600: 228.8 fresh, 163.9 from its N = 150 ground.", parser=count)] = None,
+             "resampled to --beads. At large N a fresh search can miss the ground that a search "
+             "at N = 150 finds (docs/methods/search.md).", parser=count)] = None,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,

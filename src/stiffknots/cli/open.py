@@ -55,7 +55,8 @@ def open_knot(
     seed: SeedOpt = 0,
     exclusion: Annotated[str, typer.Option(
         help="tube (default: w = 0.05, near the thin limit) or bead (the paper's rule "
-             "d = 1/√2: a thick tube for an open knot, ε_e ~30 % above 2π² for 3_1).")
+             "d = 1/√2: a thick tube for an open knot, its ε_e far above the thin limit; "
+             "docs/open-knots.md).")
                          ] = "tube",
     w: Annotated[float | None, typer.Option(
         help="Tube diameter in bond lengths (tube model; default 0.05).")] = None,
