@@ -106,16 +106,28 @@ def grounds(
                    ] = None,
     json_: JsonOpt = False,
 ) -> None:
-    """Every ground state: one row per knot × model × N × width (the lowest-ε settings)."""
-    from stiffknots.store import ground_table, to_csv
+    """Every ground state: one row per knot × model × N × width (the lowest-ε settings), with
+    its verdict and, where `stiffknots audit` searched it again, the audit's finding."""
+    from stiffknots.store import ground_table, thickness_key, to_csv
     from stiffknots.sweeps import CONVERGENCE_RULE, is_converged
+    from stiffknots.sweeps.audit import latest_audits
     from stiffknots.sweeps.convergence import untried_starts
+    from stiffknots.sweeps.plan import PROBLEM
 
     if csv is not None and csv.is_dir():
         raise UserError(f"--csv {csv} is a folder; give the path of a file")
     with _open(ctx) as store:
-        rows = ground_table(store)
+        rows = ground_table(store, problem=PROBLEM)  # the sweeps' own (not the audits')
+        audits = latest_audits(store)
     for r in rows:
+        a = audits.get((r["knot"], r["exclusion"], r["beads"], thickness_key(r["thickness"]),
+                        r["settings_hash"]))
+        # the newest audit of this verdict (stiffknots audit), None where none was made
+        r["audit"] = None if a is None else {
+            "audit": a["audit"], "false_verdict": bool(a["false_verdict"]),
+            "audit_epsilon": a["audit_epsilon"], "audit_state": a["audit_state"],
+            "searches": a["searches"], "depth": a["params"].get("depth"),
+            "created": a["created"]}
         r["width"] = _width(r["exclusion"], r["thickness"], r["beads"])
         # ``converged``: the ground state's verdict by the sweeps' rule (the top-level
         # ``converged_rule`` says it in words); the stored flag of its lowest replica (null
@@ -148,7 +160,9 @@ def grounds(
     one = {ex: next(iter(w)) for ex, w in widths.items() if len(w) == 1}
     t = Table(title=f"ground states in {ctx.obj['db']}",
               caption="metastable: the lowest other state, (+k) more (stiffknots db states K)")
-    for col in ("knot", "model", "state", "ε", "replicas", "converged", "metastable"):
+    audited = any(r["audit"] for r in rows)
+    for col in ("knot", "model", "state", "ε", "replicas", "converged",
+                *(("audit",) if audited else ()), "metastable"):
         t.add_column(col, justify="right" if col in ("ε", "replicas") else "left",
                      no_wrap=col in ("knot", "state", "ε"))
     for r in rows:
@@ -158,10 +172,12 @@ def grounds(
         meta = [m.strip() for m in (r["metastable"] or "").split(";") if m.strip()]
         meta_text = (meta[0] + (f" (+{len(meta) - 1})" if len(meta) > 1 else "")
                      if meta else "—")
+        a = r["audit"]
+        audit_cell = ("—" if a is None else "false" if a["false_verdict"] else "held")
         t.add_row(escape(r["knot"]), escape(width), escape(r["state"]),
                   f"{r['epsilon']:.3f}", f"{r['count']}/{r['replicas']}",
                   "yes" if r["converged"] else "no" + ("*" if r["untried_starts"] else ""),
-                  escape(meta_text))
+                  *((audit_cell,) if audited else ()), escape(meta_text))
     out.print(t)
     for ex in sorted(one):
         out.print(f"{'bead' if ex == 'bead' else 'tube'}: {one[ex]}", highlight=False,
@@ -172,5 +188,13 @@ def grounds(
     if untried:
         out.print("no*: a default start not tried yet — " + "; ".join(untried),
                   highlight=False, markup=False)
+    if audited:
+        false = [f"{r['knot']} {r['exclusion']} {r['epsilon']:.2f} → "
+                 f"{r['audit']['audit_epsilon']:.2f} ({r['audit']['audit_state']})"
+                 for r in rows if r["audit"] and r["audit"]["false_verdict"]]
+        out.print("audit (stiffknots audit: the verdict searched again; false: a search "
+                  "ended lower by > 0.1 %)" + (": lower states found — " + "; ".join(false)
+                                               if false else ""),
+                  highlight=False, markup=False, soft_wrap=True)
     if path is not None:
         out.print(f"CSV: {path}", highlight=False, markup=False)

@@ -14,6 +14,7 @@ import typer
 from stiffknots.cli import (
     anneal,
     atlas,
+    audit,
     catalogue,
     curves,
     db,
@@ -55,6 +56,7 @@ for _name, _command in (
         ("thin-limit", thin_limit.thin_limit),
         ("paper", studies.paper),
         ("atlas", atlas.atlas),
+        ("audit", audit.audit),
         ("bench", studies.bench),
         ("warmup", studies.warmup),
         ("version", catalogue.version)):

@@ -1,4 +1,4 @@
-"""Schema of the results database (SQLite), version 1.
+"""Schema of the results database (SQLite), version 2.
 
 One file (default ``results/stiffknots.db``; ``--db PATH``), journal mode WAL (readers never
 block the writer, a killed writer never leaves a half-written row), one row per annealed
@@ -68,17 +68,54 @@ bead count, thickness and settings, the set whose states are grouped together (s
 :meth:`Store.states <stiffknots.store.sqlite.Store.states>`) — with its replica count and its
 lowest and mean ε.
 
+Table ``audits`` (version 2)
+---------------------------
+One row per audited ensemble and audit (:mod:`stiffknots.sweeps.audit`): a converged ground
+state searched again by independent searches. Key: ``UNIQUE(audit, knot, exclusion, beads,
+thickness_key, settings_hash)`` — an audit run again replaces its rows.
+
+=====================  ========  ==========================================================
+column                 type      meaning
+=====================  ========  ==========================================================
+id                     INTEGER   row id
+audit                  TEXT      16 hex digits: the hash of the audit's parameters (``params``)
+created                TEXT      UTC time the row was written (ISO 8601)
+version                TEXT      stiffknots version of the audit
+knot, exclusion,       …         the audited ensemble (as in ``replicas``)
+beads, thickness_key,
+settings_hash
+w_over_L               REAL      its w/L
+epsilon                REAL      the ε of its converged ground state
+state                  TEXT      that state's name (``CB(i=2)``, ``80``, ...)
+audit_settings_hash    TEXT      the settings of the audit's searches (their ensemble in
+                                 ``replicas``, problem ``audit``)
+audit_seed             INTEGER   the seed of the audit's searches
+searches               INTEGER   how many audit searches ended
+audit_epsilon          REAL      the lowest ε they reached (NULL: none ended)
+audit_state            TEXT      the name of that state
+false_verdict          INTEGER   1: a search went lower than ``epsilon`` by more than the
+                                 tolerance (the verdict was false); 0: none did
+params                 TEXT      the audit's parameters (JSON: sample, seed, depth,
+                                 replicas, models, tolerance)
+=====================  ========  ==========================================================
+
 Table ``meta``: ``key``/``value`` text pairs (``schema_version``, ``created``,
-``created_by``).
+``created_by``, and ``migrated`` once a database was migrated).
+
+Migrations: a database of an older version opened for writing is migrated in one transaction
+(:data:`MIGRATIONS`: version 1 → 2 adds ``audits``); opened read-only it is read as it is
+(:data:`READABLE`: a version-1 database has no audits).
 """
 
 from __future__ import annotations
 
-__all__ = ["SCHEMA_VERSION", "APPLICATION_ID", "DDL", "COLUMNS", "ROW_COLUMNS",
-           "ENSEMBLE_FIELDS"]
+__all__ = ["SCHEMA_VERSION", "READABLE", "MIGRATIONS", "APPLICATION_ID", "DDL", "COLUMNS",
+           "ROW_COLUMNS", "ENSEMBLE_FIELDS", "AUDIT_COLUMNS"]
 
 #: Version of the schema this code writes and reads.
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: The versions a read-only store reads as they are (no migration: it writes nothing).
+READABLE = (1, 2)
 
 #: ``PRAGMA application_id`` of a stiffknots results database (the bytes ``"SKNT"``).
 APPLICATION_ID = int.from_bytes(b"SKNT", "big")
@@ -132,6 +169,39 @@ SELECT knot, exclusion, beads, thickness_key, min(thickness) AS thickness,
 FROM replicas
 GROUP BY knot, exclusion, beads, thickness_key, settings_hash"""
 
+_AUDITS = """
+CREATE TABLE IF NOT EXISTS audits (
+    id                   INTEGER PRIMARY KEY,
+    audit                TEXT    NOT NULL CHECK (length(audit) = 16),
+    created              TEXT    NOT NULL,
+    version              TEXT    NOT NULL,
+    knot                 TEXT    NOT NULL,
+    exclusion            TEXT    NOT NULL CHECK (exclusion IN ('bead', 'tube')),
+    beads                INTEGER NOT NULL,
+    thickness_key        TEXT    NOT NULL,
+    settings_hash        TEXT    NOT NULL CHECK (length(settings_hash) = 16),
+    w_over_L             REAL    NOT NULL,
+    epsilon              REAL    NOT NULL,
+    state                TEXT,
+    audit_settings_hash  TEXT    NOT NULL CHECK (length(audit_settings_hash) = 16),
+    audit_seed           INTEGER NOT NULL,
+    searches             INTEGER NOT NULL CHECK (searches >= 0),
+    audit_epsilon        REAL,
+    audit_state          TEXT,
+    false_verdict        INTEGER NOT NULL CHECK (false_verdict IN (0, 1)),
+    params               TEXT    NOT NULL,
+    UNIQUE (audit, knot, exclusion, beads, thickness_key, settings_hash)
+)"""
+
+#: Every column of ``audits``, in table order.
+AUDIT_COLUMNS = ("id", "audit", "created", "version", "knot", "exclusion", "beads",
+                 "thickness_key", "settings_hash", "w_over_L", "epsilon", "state",
+                 "audit_settings_hash", "audit_seed", "searches", "audit_epsilon",
+                 "audit_state", "false_verdict", "params")
+
+#: version → the statements that migrate a database of that version to the next one.
+MIGRATIONS: dict[int, tuple[str, ...]] = {1: (_AUDITS,)}
+
 #: The statements that create an empty database (run in one transaction, idempotent).
 DDL: tuple[str, ...] = (
     "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
@@ -140,6 +210,7 @@ DDL: tuple[str, ...] = (
     "(knot, exclusion, beads, thickness_key, settings_hash, epsilon)",
     "CREATE INDEX IF NOT EXISTS replicas_settings ON replicas (settings_hash)",
     _ENSEMBLES,
+    _AUDITS,
 )
 
 #: Every column of ``replicas``, in table order.

@@ -53,6 +53,7 @@ from stiffknots.store.errors import KeyCollisionError, SchemaVersionError, Store
 from stiffknots.store.keys import (
     KEY_FIELDS,
     ReplicaKey,
+    canonical_json,
     knot_sort_key,
     thickness_key,
 )
@@ -60,9 +61,12 @@ from stiffknots.store.keys import settings_hash as hash_settings
 from stiffknots.store.rows import blob_coords, decode_row, normalise_row, search_of
 from stiffknots.store.schema import (
     APPLICATION_ID,
+    AUDIT_COLUMNS,
     COLUMNS,
     DDL,
     ENSEMBLE_FIELDS,
+    MIGRATIONS,
+    READABLE,
     ROW_COLUMNS,
     SCHEMA_VERSION,
 )
@@ -195,6 +199,7 @@ class Store:
         self._abandoned: list[sqlite3.Connection] = []
         self._con: sqlite3.Connection | None = None
         self._pid = os.getpid()
+        self._version = SCHEMA_VERSION  # a read-only store may read an older one
         self._con = self._connect()
 
     # ---- connection ------------------------------------------------------------------------
@@ -299,9 +304,10 @@ class Store:
             con.close()
             raise StoreError(f"{path} holds no results database yet (no tables); run a sweep "
                              "first, or give the right --db path")
-        if version != SCHEMA_VERSION:
+        if version not in READABLE:
             con.close()
             self._check_version(version)
+        self._version = version
         return con
 
     def _cannot(self, doing: str, e: sqlite3.Error) -> StoreError:
@@ -381,7 +387,35 @@ class Store:
                 if con.in_transaction:
                     con.execute("ROLLBACK")
                 raise
+        if version in MIGRATIONS:
+            version = self._migrate(con)
         self._check_version(version)
+
+    def _migrate(self, con: sqlite3.Connection) -> int:
+        """Migrate an older database to :data:`SCHEMA_VERSION`, one version at a time, in one
+        transaction (:data:`~stiffknots.store.schema.MIGRATIONS`); its replicas are kept as
+        they are. Returns the version reached."""
+        con.execute("BEGIN IMMEDIATE")
+        try:
+            version = self._schema_version(con)  # another process may have migrated it
+            start = version
+            while version in MIGRATIONS:
+                for statement in MIGRATIONS[version]:
+                    con.execute(statement)
+                version += 1
+            if version != start:
+                now = datetime.now(UTC).isoformat(timespec="seconds")
+                con.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'",
+                            (str(version),))
+                con.execute("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
+                            ("migrated", f"{now}: version {start} → {version} by "
+                                         f"stiffknots {__version__}"))
+            con.execute("COMMIT")
+        except BaseException:
+            if con.in_transaction:
+                con.execute("ROLLBACK")
+            raise
+        return version
 
     def _check_version(self, version: int) -> None:
         if version != SCHEMA_VERSION:
@@ -852,6 +886,49 @@ class Store:
     def meta(self) -> dict[str, str]:
         """The ``meta`` table (``schema_version``, ``created``, ``created_by``)."""
         return dict(self._query("SELECT key, value FROM meta"))
+
+    # ---- audits ----------------------------------------------------------------------------
+
+    def put_audits(self, rows: Iterable[Mapping[str, Any]]) -> int:
+        """Write audit rows (:mod:`stiffknots.sweeps.audit`; the columns of
+        :data:`~stiffknots.store.schema.AUDIT_COLUMNS` but ``id``), in one transaction; a row
+        whose key (audit, ensemble) is stored replaces it. Returns the rows written."""
+        cols = AUDIT_COLUMNS[1:]
+        sql = (f"INSERT OR REPLACE INTO audits ({', '.join(cols)}) "
+               f"VALUES ({', '.join(':' + c for c in cols)})")
+        rows = [dict(r) for r in rows]
+        for r in rows:
+            missing = [c for c in cols if c not in r]
+            if missing:
+                raise ValueError(f"an audit row lacks {', '.join(missing)}")
+            if not isinstance(r["params"], str):
+                r["params"] = canonical_json(r["params"])
+        with self._write() as con:
+            con.executemany(sql, [{c: r[c] for c in cols} for r in rows])
+        return len(rows)
+
+    def audits(self, knot: str | list[str] | None = None, exclusion: str | None = None,
+               audit: str | None = None) -> list[dict[str, Any]]:
+        """Stored audit rows (``params`` decoded), in knot-table order then newest first;
+        none in a version-1 database read as it is."""
+        if self._version < 2:
+            return []
+        clauses, params = [], []
+        for col, value in (("knot", knot), ("exclusion", exclusion), ("audit", audit)):
+            if value is None:
+                continue
+            values = list(value) if isinstance(value, list | tuple) else [value]
+            clauses.append(f"{col} IN ({', '.join('?' * len(values))})")
+            params.extend(values)
+        where = (" WHERE " + " AND ".join(clauses)) if clauses else ""
+        out = []
+        for r in self._query(f"SELECT {', '.join(AUDIT_COLUMNS)} FROM audits{where}", params):
+            d = dict(zip(AUDIT_COLUMNS, r, strict=True))
+            d["params"] = json.loads(d["params"])
+            out.append(d)
+        out.sort(key=lambda d: d["created"], reverse=True)
+        out.sort(key=lambda d: knot_sort_key(d["knot"]))
+        return out
 
 
 def _eps_by_search(members: Iterable[Mapping[str, Any]]) -> dict[str, float]:

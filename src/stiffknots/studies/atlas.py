@@ -41,6 +41,7 @@ from stiffknots._version import __version__
 from stiffknots.fileio import replaced_entries, write_json
 from stiffknots.store import Store
 from stiffknots.sweeps import Budget, SweepListener, SweepResult
+from stiffknots.sweeps.audit import latest_audits
 from stiffknots.width import Width
 
 __all__ = ["DEFAULT_OUT", "DEFAULT_DB", "bead_above_tube", "knot_records", "atlas_input",
@@ -156,9 +157,30 @@ def _bead_zones(x, d: float) -> list[int]:
     return analyse_structure(x, True, d=d).bead_kinds().tolist()
 
 
-def atlas_input(store: Store, rec: Mapping) -> dict:
+def audit_text(audit: Mapping | None) -> str | None:
+    """What the newest audit of a verdict found, in words (``"held (3 searches)"``, ``"false:
+    216.36 (80)"``); None where none was made."""
+    if audit is None:
+        return None
+    if audit["false_verdict"]:
+        return f"false: {audit['audit_epsilon']:.2f} ({audit['audit_state']})"
+    return f"held ({audit['searches']} searches)"
+
+
+def audit_of(audits: Mapping[tuple, Mapping], model: Width, st: Mapping) -> dict | None:
+    """The newest audit of one ensemble's verdict (``audits``:
+    :func:`stiffknots.sweeps.audit.latest_audits`)."""
+    from stiffknots.store import thickness_key
+
+    return audits.get((st["knot"], model.exclusion, model.beads,
+                       thickness_key(model.thickness), st["settings_hash"]))
+
+
+def atlas_input(store: Store, rec: Mapping, audits: Mapping[tuple, Mapping] | None = None
+                ) -> dict:
     """One knot in the input schema of :func:`stiffknots.report.atlas.write_atlas`, with the
-    chain of every state's representative replica."""
+    chain of every state's representative replica, and the audit of each verdict where
+    ``audits`` (:func:`stiffknots.sweeps.audit.latest_audits`) has one."""
     k = rec["knot"]
     models = {}
     for name, v in rec["models"].items():
@@ -177,8 +199,9 @@ def atlas_input(store: Store, rec: Mapping) -> dict:
                     "coords": x, "closed": True, "radius": radius,
                     "zones": _bead_zones(x, d) if s.get("structure") else None}
 
-        models[name] = {"width": m.text, "replicas": st["replicas"],
-                        "ground": state(st["ground"], conv),
+        ground = state(st["ground"], conv)
+        ground["audit"] = audit_text(audit_of(audits or {}, m, st))
+        models[name] = {"width": m.text, "replicas": st["replicas"], "ground": ground,
                         "metastable": [state(s, None) for s in st["metastable"]]}
     fam = rec["families"]
     note = ("conjectured families: " + ", ".join(fam)) if fam else \
@@ -488,7 +511,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
         # written aside and swapped in whole: a full disk or Ctrl-C leaves the earlier atlas,
         # and no page of an earlier, larger atlas stays behind
         with replaced_entries(out, ATLAS_ENTRIES, "atlas") as stage:
-            write_atlas(stage, [atlas_input(store, r) for r in recs],
+            audits = latest_audits(store)
+            write_atlas(stage, [atlas_input(store, r, audits) for r in recs],
                         families=families_table(study), meta=meta, default_model=main,
                         thumbnails=thumbnails)
             fig = _plot_eps_n2(study, stage / "eps_vs_n2.png")

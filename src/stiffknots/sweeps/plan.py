@@ -54,19 +54,21 @@ START_POLICY = "braid,cage,eighty;added:lowest"
 FAVOUR_FROM = 3
 
 
-def sweep_settings(model: Width, budget: Budget) -> dict[str, Any]:
+def sweep_settings(model: Width, budget: Budget, problem: str = PROBLEM) -> dict[str, Any]:
     """The settings of every replica of ``model`` under ``budget`` (the input of the key's
     settings hash): ``AnnealSettings(moves, schedule, params=params_of(model)).as_dict()``, the
     moves and schedule of :meth:`Budget.search_of <stiffknots.sweeps.budgets.Budget.search_of>`
     (the annealing, or the Langevin dynamics of a Langevin bead ensemble) —
     built as ClosedAnneal builds them, which :func:`build_jobs` checks — plus
     ``problem`` and ``start`` (:func:`stiffknots.store.keys.settings_hash` says what belongs
-    there)."""
+    there). ``problem`` names what the replicas are for: :data:`PROBLEM` (``"anneal"``, a
+    sweep's own ensembles) or :data:`~stiffknots.sweeps.audit.AUDIT_PROBLEM` (an audit's
+    searches: another ensemble, never mixed into the one it checks)."""
     moves, schedule = budget.search_of(model)
     s = AnnealSettings(moves=moves, schedule=schedule, params=params_of(model))
     s.validate()
     # every replica is polished to its local minimum (problems.base.polish_run)
-    return {**s.as_dict(), "problem": PROBLEM, "start": START_POLICY, "polish": True}
+    return {**s.as_dict(), "problem": problem, "start": START_POLICY, "polish": True}
 
 
 @dataclass(frozen=True)
@@ -168,7 +170,7 @@ def resolve_knots(knots: Iterable[str] | None = None, max_crossings: int | None 
 
 
 def plan_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget,
-               seed: int = 0) -> list[SweepJob]:
+               seed: int = 0, problem: str = PROBLEM) -> list[SweepJob]:
     """Every job of a sweep, knot-major (all replicas of a knot's models, then the next
     knot). Cheap: nothing is built, no embedding is made.
 
@@ -182,10 +184,12 @@ def plan_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget,
         Replicas and moves (:mod:`stiffknots.sweeps.budgets`).
     seed : int
         The sweep's seed (0 ≤ seed < 2⁶³).
+    problem : str
+        What the replicas are for (:func:`sweep_settings`).
     """
     seed = V.seed(seed)
     budget.validate()
-    settings = {m: sweep_settings(m, budget) for m in models}
+    settings = {m: sweep_settings(m, budget, problem) for m in models}
     hashes = {m: settings_hash(s) for m, s in settings.items()}
     return [SweepJob(k, m, r, seed, settings[m],
                      ReplicaKey(k, m.exclusion, m.beads, m.thickness, seed, r, hashes[m]))
@@ -199,7 +203,8 @@ def pending(jobs: Sequence[SweepJob], store: Store) -> list[SweepJob]:
     hashes = sorted({j.key.settings_hash for j in jobs})
     seeds = sorted({j.seed for j in jobs})
     knots = sorted({j.knot for j in jobs})
-    stored = store.keys(settings_hash=hashes, seed=seeds, problem=PROBLEM,
+    problems = sorted({j.settings["problem"] for j in jobs})
+    stored = store.keys(settings_hash=hashes, seed=seeds, problem=problems,
                         knot=knots if len(knots) <= 100 else None)
     return [j for j in jobs if j.key not in stored]
 

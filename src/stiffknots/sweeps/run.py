@@ -59,6 +59,7 @@ from stiffknots.sweeps.convergence import ensemble_converged as converged_with_e
 from stiffknots.sweeps.cross import SEEDED_START, seed_from_tube, seed_pairs
 from stiffknots.sweeps.legs import LEG_REPLICA, leg_job
 from stiffknots.sweeps.plan import (
+    PROBLEM,
     SweepJob,
     favoured_start,
     pending,
@@ -293,7 +294,8 @@ def _jobs_of(g: Mapping[str, Any]) -> int:
 def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, store: Store, *,
               seed: int = 0, scheduler: str | None = None, workers: int | None = None,
               max_replicas: int | None = None, step: int = 2,
-              listener: SweepListener | None = None, run: bool = True) -> SweepResult:
+              listener: SweepListener | None = None, run: bool = True,
+              problem: str = PROBLEM) -> SweepResult:
     """Run every job of knots × models × replicas that ``store`` lacks; store each result.
 
     Parameters
@@ -330,6 +332,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
         (``left``: the planned replicas not stored, and the next ``step`` replicas of every
         (knot, model) whose replicas have ended unconverged; more may follow them) — and
         start no cluster (the pages of a sweep stopped part-way).
+    problem : str
+        What the replicas are for (:func:`~stiffknots.sweeps.plan.sweep_settings`): a sweep's
+        own ensembles (``"anneal"``), or an audit's searches (:mod:`stiffknots.sweeps.audit`),
+        which no tube replica seeds — an audit's opinion is its own searches'.
 
     Returns
     -------
@@ -355,9 +361,10 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
             for m in models}
     max_r = max(most.values(), default=budget.replicas)
     step = V.integer("step", step, 1, V.MAX_REPLICAS)
-    jobs = plan_sweep(knots, models, budget, seed)
+    jobs = plan_sweep(knots, models, budget, seed, problem)
     res = SweepResult(list(knots), list(models), budget, int(seed),
-                      {m.exclusion: settings_hash(sweep_settings(m, budget)) for m in models},
+                      {m.exclusion: settings_hash(sweep_settings(m, budget, problem))
+                       for m in models},
                       jobs=len(jobs), scheduler=scheduler or "local", max_replicas=max_r)
     todo = pending(jobs, store)
     res.skipped = len(jobs) - len(todo)
@@ -397,7 +404,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
                 store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion]):
             n = min(top, g["replicas"] + step)
             more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
-                              seed)[g["replicas"]:]
+                              seed, problem)[g["replicas"]:]
             more = [replace(j, start=favoured_start(store, j, g["replicas"])) for j in more]
             g["replicas"] = n
             new = pending(more, store)
@@ -411,7 +418,7 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
         while g["legs"] < legs and not ensemble_converged(
                 store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion]):
             template = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=1),
-                                  seed)[0]
+                                  seed, problem)[0]
             leg = leg_job(store, template, g["legs"], langevin=budget.langevin(g["model"]))
             if leg is None:
                 break
@@ -430,10 +437,11 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
         listener.expected(expected_todo(groups, res.todo, budget.replicas),
                           sum(1 for g in groups.values() if g["settled"]))
 
-    settings = {m.exclusion: sweep_settings(m, budget) for m in res.models}
-    # bead model → the tube models whose replicas seed it (:mod:`stiffknots.sweeps.cross`)
+    settings = {m.exclusion: sweep_settings(m, budget, problem) for m in res.models}
+    # bead model → the tube models whose replicas seed it (:mod:`stiffknots.sweeps.cross`);
+    # none in an audit
     tubes_of: dict[str, list[str]] = {}
-    for b, t in seed_pairs(res.models):
+    for b, t in (seed_pairs(res.models) if problem == PROBLEM else ()):
         tubes_of.setdefault(b.exclusion, []).append(t.exclusion)
     early: list[dict] = []  # seeded before the listener was told the plan
 

@@ -99,3 +99,22 @@ def test_a_segment_distance_below_a_thousandth_is_not_shown_as_zero(tmp_path, kn
     for text in (index, page):
         assert ">1.0e-04<" in text
     assert ">0.000<" not in index
+
+
+def test_an_audit_is_shown_under_its_verdict(tmp_path, knots, read_rows):
+    import copy
+
+    audited = copy.deepcopy([k for k in knots if k["name"] in ("3_1", "4_1")])
+    audited[0]["models"]["bead"]["ground"]["audit"] = "false: 70.00 (CB(i=2))"
+    audited[1]["models"]["bead"]["ground"]["audit"] = "held (3 searches)"
+    index = write_atlas(tmp_path, audited, title="audited", thumbnails=False)
+    rows = {a["data-name"]: c for a, c in read_rows(index.read_text(encoding="utf-8"))}
+    assert rows["3_1"]["converged"]["spans"]["bead"].endswith("audit: false: 70.00 (CB(i=2))")
+    assert rows["4_1"]["converged"]["spans"]["bead"].endswith("audit: held (3 searches)")
+    assert "audit" not in rows["3_1"]["converged"]["spans"].get("tube", "")
+    page = (tmp_path / "knots" / "3_1.html").read_text(encoding="utf-8")
+    assert 'class="audit">audit: false: 70.00 (CB(i=2))</small>' in page
+    with pytest.raises(ValueError, match="audit must be a text"):
+        bad = copy.deepcopy(audited[:1])
+        bad[0]["models"]["bead"]["ground"]["audit"] = 1
+        write_atlas(tmp_path / "bad", bad, thumbnails=False)

@@ -7,7 +7,15 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from stiffknots.report.atlas.figures import shape_badge
-from stiffknots.report.atlas.markup import asset, esc, json_script, num, page_head, yes_no
+from stiffknots.report.atlas.markup import (
+    asset,
+    audit_note,
+    esc,
+    json_script,
+    num,
+    page_head,
+    yes_no,
+)
 from stiffknots.report.atlas.schema import KnotRow, ModelRow, natural_key
 from stiffknots.report.text import segment_distance_text
 
@@ -83,7 +91,8 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
             ("converged", "text", "",
              "whether two independent searches reached the lowest ε found (within 0.1 %): a "
              "statement about the searches, not proof that no lower state exists; how often "
-             "a deeper search found lower: docs/methods/verdicts.md"),
+             "a deeper search found lower: docs/methods/verdicts.md. audit: what "
+             "stiffknots audit found when it searched the verdict again"),
             ("metastable", "num", "", "the other states found: shape ×count (ε)"),
             ("d<sub>min</sub>", "num", "num",
              "minimum distance between non-adjacent segments of the ground state (the bead "
@@ -153,7 +162,8 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
             k, models, lambda m: esc(gs(m).width) if gs(m) and gs(m).width else "—",
             lambda m: gs(m).width if gs(m) and gs(m).width else None, "width"))
         cells.append(_per_model_cell(
-            k, models, lambda m: yes_no(gs(m).converged) if gs(m) else "—",
+            k, models, lambda m: (yes_no(gs(m).converged) + audit_note(gs(m).audit))
+            if gs(m) else "—",
             lambda m: yes_no(gs(m).converged) if gs(m) and gs(m).converged is not None
             else None))
 

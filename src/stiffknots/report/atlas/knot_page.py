@@ -5,7 +5,15 @@ from __future__ import annotations
 
 from stiffknots._version import __version__
 from stiffknots.report.atlas.figures import COLORSCALE, ZONE_COLOURS, shape_badge, state_mesh
-from stiffknots.report.atlas.markup import asset, esc, json_script, num, page_head, yes_no
+from stiffknots.report.atlas.markup import (
+    asset,
+    audit_note,
+    esc,
+    json_script,
+    num,
+    page_head,
+    yes_no,
+)
 from stiffknots.report.atlas.schema import ZONE_KINDS, KnotRow, StateRow
 from stiffknots.report.text import segment_distance_text
 
@@ -96,7 +104,7 @@ def knot_page(k: KnotRow, models: list[tuple[str, str]], default: str | None, ti
                 f'<td class="num">{num(st.epsilon)}</td>'
                 f'<td class="num">{num(st.eps_mean)}</td>'
                 f'<td class="num">{_count_text(st, m.replicas)}</td>'
-                f"<td>{yes_no(st.converged)}</td>"
+                f"<td>{yes_no(st.converged)}{audit_note(st.audit)}</td>"
                 f'<td class="num">{segment_distance_text(st.min_segment_distance)}</td>'
                 f'<td class="width">{esc(st.width) if st.width else "—"}</td>'
                 f"<td>{view}</td></tr>\n")

@@ -12,7 +12,7 @@ from typing import Any
 
 from stiffknots._json import to_plain
 
-__all__ = ["asset", "esc", "json_script", "num", "page_head", "yes_no"]
+__all__ = ["asset", "audit_note", "esc", "json_script", "num", "page_head", "yes_no"]
 
 
 @functools.cache
@@ -35,6 +35,14 @@ def num(x: float | None, digits: int = 2) -> str:
 def yes_no(v: bool | None) -> str:
     """"yes", "no", or "—" for unknown."""
     return "—" if v is None else ("yes" if v else "no")
+
+
+def audit_note(audit: str | None) -> str:
+    """The audit of a verdict beside it (``<br><small class="audit">audit: held</small>``;
+    nothing where no audit was made)."""
+    if not audit:
+        return ""
+    return f'<br><small class="audit">audit: {esc(audit)}</small>'
 
 
 def json_script(obj: Any) -> str:

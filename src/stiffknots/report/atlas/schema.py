@@ -39,6 +39,8 @@ where a ``STATE`` is a dict::
       "eps_mean": 128.6,                 # optional: mean ε of the replicas in this state
       "count": 5,                        # optional: replicas that ended in this state
       "converged": True,                 # optional: True, False or None (unknown)
+      "audit": "held",                   # optional: what an audit of the verdict found
+                                         #   (stiffknots audit), e.g. "false: 216.36 (80)"
       "min_segment_distance": 0.48,      # optional: closest approach of two segments
       "coords": array of shape (N, 3),   # optional: the chain (for the 3D view, thumbnail)
       "zones": [0, 0, 1, 1, 2, ...],     # optional, with coords: per bead, the kind of contact
@@ -128,6 +130,7 @@ class StateRow:
     width: str | None
     radius: float | None
     zones: np.ndarray | None = None
+    audit: str | None = None
 
     @property
     def shape_label(self) -> str | None:
@@ -286,6 +289,10 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> StateRow:
     if structure is not None and not isinstance(structure, str):
         raise ValueError(f"{where}: structure must be a text such as '2 point-braids' or "
                          f"None, got {structure!r}")
+    audit = d.get("audit")
+    if audit is not None and not isinstance(audit, str):
+        raise ValueError(f"{where}: audit must be a text such as 'held' or None, got "
+                         f"{audit!r}")
     radius = _opt_float(d.get("radius"), f"{where}: radius")
     if radius is not None and radius <= 0:
         raise ValueError(f"{where}: the drawing radius must be > 0, got {radius}")
@@ -306,6 +313,7 @@ def _state(d: Any, role: str, model_width: str | None, where: str) -> StateRow:
         width=width,
         radius=radius,
         zones=_zones(d.get("zones"), coords, where),
+        audit=audit,
     )
 
 

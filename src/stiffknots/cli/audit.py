@@ -1,0 +1,147 @@
+"""``stiffknots audit``: search a random sample of converged verdicts again and count the false
+ones (:mod:`stiffknots.sweeps.audit`)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from stiffknots.cli.app import (
+    Interrupted,
+    JsonOpt,
+    SeedOpt,
+    UserError,
+    count,
+    dump,
+    err,
+    out,
+    prepare_file,
+)
+from stiffknots.cli.atlas import SweepProgress
+
+
+def _pct(x: float | None) -> str:
+    return "—" if x is None else f"{100 * x:.1f} %"
+
+
+def rate_text(r: dict) -> str:
+    """``"2 of 40 false (5.0 %, 95 % interval 1.4–16.5 %)"``."""
+    if not r["n"]:
+        return "no entry audited"
+    return (f"{r['false']} of {r['n']} false ({_pct(r['rate'])}, 95 % interval "
+            f"{100 * r['low']:.1f}–{100 * r['high']:.1f} %)")
+
+
+def audit(
+    db: Annotated[str, typer.Option(
+        help="Results database whose converged verdicts are audited (written: the audit's "
+             "searches, another ensemble, and its rows).")] = "results/stiffknots.db",
+    sample: Annotated[int, typer.Option(
+        help="Converged entries drawn at random (all of them when fewer).", parser=count)
+    ] = 20,
+    seed: SeedOpt = 0,
+    depth: Annotated[float, typer.Option(
+        help="Moves of every audit search, in moves of one replica of the audited entry "
+             "(steps for a Langevin bead ensemble); 0.1..1000.")] = 2.0,
+    replicas: Annotated[int, typer.Option(
+        help="Audit searches per entry, from the knot's default starts round-robin (braid, "
+             "cage, 80), with another seed than the sweep's.", parser=count)] = 3,
+    models: Annotated[str, typer.Option(
+        help="Models whose verdicts are audited, separated by commas: tube and/or bead.")
+    ] = "tube",
+    max_crossings: Annotated[int | None, typer.Option(
+        help="Only knots with at most this many crossings.")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        help="Address of a running Dask scheduler; default: a local cluster.")] = None,
+    workers: Annotated[int | None, typer.Option(
+        help="Worker processes of the local cluster (default: one per core).")] = None,
+    json_: JsonOpt = False,
+) -> None:
+    """Audit the verdicts of a results database: a seeded random sample of its converged
+    ground states, each searched again by independent searches (another seed, every default
+    start, --depth times the moves); an entry is false when a search ends lower by more than
+    0.1 %. Prints the false-verdict rate with its 95 % Wilson interval per model and crossing
+    number, and stores the audit (db grounds and the atlas pages show it). See
+    docs/methods/verdicts.md."""
+    from pathlib import Path
+
+    from stiffknots.store import Store
+    from stiffknots.sweeps import MODELS
+    from stiffknots.sweeps.audit import audit_budget, run_audit
+    from stiffknots.sweeps.cluster import local_workers, scheduler_address
+
+    names = sorted({m.strip() for m in models.split(",") if m.strip()})
+    bad = [m for m in names if m not in MODELS]
+    if not names or bad:
+        raise UserError(f"--models must be tube and/or bead separated by commas, got "
+                        f"{models!r}")
+    audit_budget({"moves": 1000}, depth, replicas)  # --depth, --replicas checked first
+    if max_crossings is not None and not 3 <= max_crossings <= 13:
+        raise UserError(f"--max-crossings must be 3..13, got {max_crossings}")
+    if scheduler is None:
+        local_workers(workers)
+    else:
+        scheduler = scheduler_address(scheduler)
+        if workers is not None:
+            raise UserError("--workers is for the local cluster; a --scheduler has its own")
+    if not Path(db).is_file():
+        raise UserError(f"no results database at {db}: audit a database a sweep wrote "
+                        "(stiffknots atlas --db ...), or give the right --db path")
+    path = prepare_file(db, "--db")
+    with Store(path) as store, SweepProgress() as bar:
+        res = run_audit(store, models=names, sample=sample, seed=seed, depth=depth,
+                        replicas=replicas, max_crossings=max_crossings, scheduler=scheduler,
+                        workers=workers, listener=bar)
+    d = res.to_dict()
+    if res.interrupted:
+        if json_:
+            dump(d)
+        raise Interrupted(f"interrupted: the audit searches that ended are stored in {path}; "
+                          "run the same command to resume")
+    if json_:
+        dump(d)
+    else:
+        _print(d)
+    if res.failed:
+        for f in res.failed:
+            err.print(f"failed: {f['job']}: {f['error']}", highlight=False, markup=False,
+                      soft_wrap=True)
+        raise typer.Exit(1)
+
+
+def _print(d: dict) -> None:
+    p = d["params"]
+    if not d["entries"]:
+        out.print(f"nothing to audit: no converged {' or '.join(p['models'])} verdict in the "
+                  "database (stiffknots db grounds lists its verdicts)", highlight=False)
+        return
+    t = Table(title=f"audit {d['audit']}: {len(d['entries'])} of {d['converged']} converged "
+                    f"entries, {p['replicas']} searches × {p['depth']:g} replica budgets each",
+              caption="false: an audit search ended lower by > 0.1 %")
+    for col in ("knot", "model", "verdict", "audit", "runs", "result"):
+        t.add_column(col, justify="right" if col == "runs" else "left",
+                     no_wrap=col in ("knot", "verdict", "audit", "result"))
+    widths: dict[str, float] = {}
+    for r in d["entries"]:
+        widths.setdefault(r["exclusion"], r["w_over_L"])
+        ae = r["audit_epsilon"]
+        result = (f"false ({100 * r['gap']:.1f} % lower)" if r["false_verdict"] else "held")
+        t.add_row(*[escape(str(c)) for c in (
+            r["knot"], r["exclusion"], f"{r['epsilon']:.2f} {r['state']}",
+            "—" if ae is None else f"{ae:.2f} {r['audit_state']}", r["searches"], result)])
+    out.print(t)
+    out.print("widths: " + ", ".join(f"{m} w/L = {v:.5f}" for m, v in widths.items())
+              + " (the verdicts' own width, N and settings)", highlight=False)
+    s = d["summary"]
+    for m, r in s["by_model"].items():
+        out.print(f"{m}: {rate_text(r)}", highlight=False)
+    for k, r in s["by_crossings"].items():
+        out.print(f"  {k.replace('/', ', n_c = ')}: {rate_text(r)}", highlight=False)
+    if s["unsearched"]:
+        out.print(f"{s['unsearched']} entries with no audit search ended (not counted)",
+                  highlight=False)
+    out.print(f"{d['wall_seconds']:.0f} s wall, {d['cpu_seconds']:.0f} CPU s; stored as audit "
+              f"{d['audit']} (stiffknots db grounds shows it)", highlight=False)
