@@ -260,6 +260,41 @@ def tempering_comparison(d: dict) -> list[str]:
     return out
 
 
+def small_jobs(d: dict) -> list[str]:
+    out = ["| command | wall s (median) | CPU s (median) | result |", "| --- | --- | --- | --- |"]
+    for r in d["rows"]:
+        res = (f"ε = {r['epsilon']:.4f}, {r['rounds']} rounds" if "epsilon" in r
+               else r.get("name") or "")
+        out.append(f"| `{r['command']}` | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | {res} |")
+    return out
+
+
+def _rate(r: dict) -> str:
+    if not r["n"]:
+        return "—"
+    return (f"{r['false']} of {r['n']} ({100 * r['rate']:.1f} %; 95 % interval "
+            f"{100 * r['low']:.1f}–{100 * r['high']:.1f} %)")
+
+
+def verdict_audit(d: dict) -> list[str]:
+    p = d["params"]
+    out = [f"`stiffknots audit` of `{d['db']}`: {d['summary']['all']['n']} of its "
+           f"{d['converged']} converged {', '.join(p['models'])} verdicts drawn with seed "
+           f"{p['seed']}, each searched again by {p['replicas']} searches of {p['depth']:g} "
+           f"replica budgets ({d['cpu_seconds']:.0f} CPU s in all).", "",
+           "| verdicts | false (a search > 0.1 % lower) |", "| --- | --- |",
+           f"| all | {_rate(d['summary']['all'])} |"]
+    out += [f"| {k.replace('/', ', n_c = ')} | {_rate(r)} |"
+            for k, r in d["summary"]["by_crossings"].items()]
+    out += [f"| agreeing searches from {k} start famil{'y' if k == 'one' else 'ies'} | "
+            f"{_rate(v['all'])} |" for k, v in d["by_start_families"].items()]
+    if d["false"]:
+        out += ["", "False verdicts: " + "; ".join(
+            f"{e['knot']} {e['epsilon']:.2f} ({e['state']}) → {e['audit_epsilon']:.2f} "
+            f"({e['audit_state']})" for e in d["false"]) + "."]
+    return out
+
+
 #: (file name, title, what it measures, the script, renderer), in the order of the page
 BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
     ("defaults_survey", "`stiffknots anneal` with its defaults, every prime knot through 8 "
@@ -287,6 +322,11 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "python bench/peer_lammps.py --knots 3_1,4_1 --seeds 3", peer_lammps),
     ("moves_at_any_n", "Moves at any N", "3_1 at N = 150, 300, 600: the finite-width excess "
      "and the time of the defaults", "python bench/moves_at_any_n.py", moves_at_any_n),
+    ("verdict_audit", "The audit of the verdicts", "how often a converged ground state is "
+     "beaten by independent searches (`stiffknots audit`), with its 95 % interval",
+     "python bench/verdict_audit.py DB", verdict_audit),
+    ("small_jobs", "Small jobs", "wall and CPU seconds of short commands as typed (fresh "
+     "processes, kernels cached)", "python bench/small_jobs.py", small_jobs),
     ("last_run", "The kernel and the time to the paper's energies (`make bench`)",
      "single-bead moves per second at N = 150 … 10⁴, plain-numpy ratio, seconds to the "
      "paper's ε", "make bench", last_run),

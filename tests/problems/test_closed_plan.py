@@ -89,3 +89,13 @@ def test_an_unknown_knot_is_refused_first():
 def test_rounds_range():
     with pytest.raises(InvalidParameter, match="rounds"):
         plan_anneal("3_1", rounds=V.MAX_ROUNDS + 1)
+
+
+def test_one_short_search_at_a_time_runs_in_this_process():
+    # 1,000 dynamics steps at N = 150: milliseconds, less than a worker costs to start
+    assert plan_anneal("3_1", moves=1000, replicas=1).quick()
+    assert plan_anneal("3_1", moves=1000, replicas=1, exclusion="tube").quick()
+    assert not plan_anneal("3_1", moves=1000, replicas=2).quick()  # two at once: the workers
+    assert not plan_anneal("3_1", replicas=1).quick()  # the default 10⁶ steps: seconds
+    assert not plan_anneal("3_1", moves=10_000_000, replicas=1, exclusion="tube").quick()
+    assert not plan_anneal("3_1", moves=1000, replicas=1, beads=2000).quick()

@@ -156,9 +156,12 @@ def anneal(
     checkpoint = claim_checkpoint(checkpoint, resume)
     out_dir = prepare_out(out_dir, overwrite)
     replicas, rounds, beads = plan.replicas, plan.rounds, plan.beads
-    # the workers start now and import the solvers while this process builds the problem
+    # the workers start now and import the solvers while this process builds the problem —
+    # except for one short search at a time, which runs here (a worker costs more than it)
     coarse_d = fine_start = None
-    with WorkerPool(default_workers(replicas)).start() as pool:
+    quick = plan.quick()
+    pool = WorkerPool(default_workers(replicas))
+    with pool if quick else pool.start():
         if plan.coarse is not None:
             problem = plan.coarse_problem()
             with ReplicaProgress(f"anneal {problem.knot_name}, coarse stage N = {plan.coarse}",
@@ -175,8 +178,8 @@ def anneal(
                 V.checkpoints(problem.jobs(first=rnd * replicas))
         with ReplicaProgress(f"anneal {problem.knot_name}", replicas * rounds,
                              disable=json_) as bars:
-            res = solve(problem, on_replica_done=bars.done, on_progress=bars, isolate=True,
-                        pool=pool)
+            res = solve(problem, on_replica_done=bars.done, on_progress=bars,
+                        isolate=not quick, pool=pool)
     hint = f"the same command and --resume (checkpoints in {checkpoint})" if checkpoint else None
     check_interrupted(res, hint)
     schedule, width = plan.schedule.kind, res.width

@@ -78,6 +78,20 @@ def beads_for_knot(knot: Knot, w_over_L: float,  # noqa: N803
     return V.beads_for_width(w_over_L, eps, rel_error)
 
 
+#: A replica's search estimated to take at most this many CPU seconds runs in the calling
+#: process (:meth:`AnnealPlan.quick`): a worker process costs more than that before its
+#: first move (docs/benchmarks.md), and Ctrl-C still stops such a search within a second.
+QUICK_SEARCH_SECONDS = 1.0
+#: … and has at most this many beads (the final minimiser's steps, which Ctrl-C waits for in
+#: this process, grow with N)
+QUICK_BEADS = 1000
+#: CPU seconds of the search, per Monte Carlo move and per Langevin bead-step (N = 150; the
+#: moves/s of bench/moves_at_any_n.json and the Langevin replicas of the atlas: ≈ 4 CPU s
+#: per 10⁶ steps at N = 150).
+SECONDS_PER_MOVE = 0.67e-6
+SECONDS_PER_BEAD_STEP = 4.0 / (1e6 * 150)
+
+
 @dataclass(frozen=True)
 class CoarseStart:
     """The start the coarse stage gives the fine run: the chain and what to report of it."""
@@ -137,6 +151,19 @@ class AnnealPlan:
     @property
     def beads(self) -> int:
         return self.width.beads
+
+    def quick(self) -> bool:
+        """Whether the run is one short search at a time: one replica a round, no coarse
+        stage, at most :data:`QUICK_BEADS` beads, its moves given and estimated at most
+        :data:`QUICK_SEARCH_SECONDS` CPU seconds. Such a run is best done in the calling
+        process (``solve(..., isolate=False)``): starting a worker process would cost more
+        than the search."""
+        if (self.moves is None or self.coarse is not None or self.replicas != 1
+                or self.beads > QUICK_BEADS):
+            return False
+        per = (SECONDS_PER_BEAD_STEP * self.beads if self.schedule.kind == "langevin"
+               else SECONDS_PER_MOVE)
+        return self.moves * per <= QUICK_SEARCH_SECONDS
 
     def problem(self, initial: Chain | None = None) -> ClosedAnneal:
         """The fine run: from ``initial`` (the coarse stage's chain) or the plan's own curve or
