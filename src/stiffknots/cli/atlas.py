@@ -163,6 +163,19 @@ class SweepProgress:
                     markup=False, highlight=False, soft_wrap=True)
 
 
+def cluster_options(scheduler: str | None, workers: int | None) -> str | None:
+    """Check --scheduler and --workers before any work: the scheduler's address (normalised)
+    or None for a local cluster of ``workers`` processes."""
+    from stiffknots.sweeps.cluster import local_workers, scheduler_address
+
+    if scheduler is None:
+        local_workers(workers)
+        return None
+    if workers is not None:
+        raise UserError("--workers is for the local cluster; a --scheduler has its own")
+    return scheduler_address(scheduler)
+
+
 def _knot_list(text: str | None) -> list[str] | None:
     if text is None:
         return None
@@ -236,7 +249,6 @@ def atlas(
     from stiffknots.problems import validate as V
     from stiffknots.studies.atlas import run_atlas
     from stiffknots.sweeps import budget_of, parse_models, resolve_knots
-    from stiffknots.sweeps.cluster import local_workers, scheduler_address
 
     if max_crossings is None and knots is None:
         raise UserError("give --max-crossings K (every prime knot through K crossings) or "
@@ -259,12 +271,7 @@ def atlas(
     V.seed(seed)
     if max_replicas is not None:  # None: the budget's (run_sweep)
         V.integer("max_replicas", max_replicas, bud.replicas, V.MAX_REPLICAS)
-    if scheduler is None:
-        local_workers(workers)
-    else:
-        scheduler = scheduler_address(scheduler)
-        if workers is not None:
-            raise UserError("--workers is for the local cluster; a --scheduler has its own")
+    scheduler = cluster_options(scheduler, workers)
     names = resolve_knots(knot_list, max_crossings)
     from pathlib import Path
 

@@ -12,7 +12,6 @@ from rich.table import Table
 from stiffknots.cli.app import (
     Interrupted,
     JsonOpt,
-    SeedOpt,
     UserError,
     count,
     dump,
@@ -20,7 +19,7 @@ from stiffknots.cli.app import (
     out,
     prepare_file,
 )
-from stiffknots.cli.atlas import SweepProgress
+from stiffknots.cli.atlas import SweepProgress, cluster_options
 
 
 def _pct(x: float | None) -> str:
@@ -42,7 +41,9 @@ def audit(
     sample: Annotated[int, typer.Option(
         help="Converged entries drawn at random (all of them when fewer).", parser=count)
     ] = 20,
-    seed: SeedOpt = 0,
+    seed: Annotated[int, typer.Option(
+        help="Seed of the draw, and of the audit's searches (derived from it: never a "
+             "sweep's seed).")] = 0,
     depth: Annotated[float, typer.Option(
         help="Moves of every audit search, in moves of one replica of the audited entry "
              "(steps for a Langevin bead ensemble); 0.1..1000.")] = 2.0,
@@ -71,7 +72,6 @@ def audit(
     from stiffknots.store import Store
     from stiffknots.sweeps import MODELS
     from stiffknots.sweeps.audit import audit_budget, run_audit
-    from stiffknots.sweeps.cluster import local_workers, scheduler_address
 
     names = sorted({m.strip() for m in models.split(",") if m.strip()})
     bad = [m for m in names if m not in MODELS]
@@ -81,12 +81,7 @@ def audit(
     audit_budget({"moves": 1000}, depth, replicas)  # --depth, --replicas checked first
     if max_crossings is not None and not 3 <= max_crossings <= 13:
         raise UserError(f"--max-crossings must be 3..13, got {max_crossings}")
-    if scheduler is None:
-        local_workers(workers)
-    else:
-        scheduler = scheduler_address(scheduler)
-        if workers is not None:
-            raise UserError("--workers is for the local cluster; a --scheduler has its own")
+    scheduler = cluster_options(scheduler, workers)
     if not Path(db).is_file():
         raise UserError(f"no results database at {db}: audit a database a sweep wrote "
                         "(stiffknots atlas --db ...), or give the right --db path")
