@@ -74,8 +74,11 @@ def states(
         return
     for e in d["ensembles"]:
         s = e["settings"]
+        what = " (the searches of an audit: stiffknots audit)" if s.get("problem") == "audit" \
+            else ""
         t = Table(title=escape(f"{name} — {e['width']}, {s.get('moves', 0):,} moves/replica, "
-                               f"settings {e['settings_hash']}, {e['replicas']} replicas"))
+                               f"settings {e['settings_hash']}, {e['replicas']} replicas"
+                               f"{what}"))
         for col in ("state", "role", "ε min", "ε mean", "replicas", "starts", "min seg dist"):
             t.add_column(col, justify="left" if col in ("state", "role", "starts") else "right")
         for k, st in enumerate([e["ground"], *e["metastable"]]):
