@@ -281,7 +281,7 @@ def verdict_audit(d: dict) -> list[str]:
     out = [f"`stiffknots audit` of `{d['db']}`: {d['summary']['all']['n']} of its "
            f"{d['converged']} converged {', '.join(p['models'])} verdicts drawn with seed "
            f"{p['seed']}, each searched again by {p['replicas']} searches of {p['depth']:g} "
-           f"replica budgets ({d['cpu_seconds']:.0f} CPU s in all).", "",
+           f"replica budgets ({d['search_cpu_seconds']:.0f} CPU s of audit searches).", "",
            "| verdicts | false (a search > 0.1 % lower) |", "| --- | --- |",
            f"| all | {_rate(d['summary']['all'])} |"]
     out += [f"| {k.replace('/', ', n_c = ')} | {_rate(r)} |"

@@ -29,6 +29,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seed", default="0")
     ap.add_argument("--models", default="tube")
     ap.add_argument("--max-crossings", default=None)
+    ap.add_argument("--note", default=None, help="How DB was made (stored in the meta).")
     a = ap.parse_args(argv)
     cmd = [sys.executable, "-m", "stiffknots.cli", "audit", "--db", a.db, "--sample", a.sample,
            "--depth", a.depth, "--replicas", a.replicas, "--seed", a.seed, "--models",
@@ -56,7 +57,7 @@ def main(argv: list[str] | None = None) -> None:
         e["start_families"] = len(starts)
     one = [e for e in d["entries"] if e["start_families"] == 1]
     several = [e for e in d["entries"] if e["start_families"] >= 2]
-    out = {"meta": run_meta(argv), "db": a.db, "audit": d["audit"], "params": d["params"],
+    out = {"meta": run_meta(argv, note=a.note), "db": a.db, "audit": d["audit"], "params": d["params"],
            "converged": d["converged"], "summary": d["summary"],
            "by_start_families": {"one": summarise(one), "several": summarise(several)},
            "false": [{k: e[k] for k in ("knot", "exclusion", "epsilon", "state",
@@ -67,10 +68,11 @@ def main(argv: list[str] | None = None) -> None:
                                           "audit_epsilon", "audit_state", "false_verdict",
                                           "searches", "agreeing_starts")}
                        for e in d["entries"]],
-           "wall_seconds": d["wall_seconds"], "cpu_seconds": d["cpu_seconds"]}
+           "search_cpu_seconds": d["search_cpu_seconds"]}
     s = d["summary"]["all"]
     print(f"{s['false']} of {s['n']} verdicts false ({100 * (s['rate'] or 0):.1f} %, 95 % "
-          f"interval {100 * s['low']:.1f}–{100 * s['high']:.1f} %), {d['cpu_seconds']:.0f} "
+          f"interval {100 * s['low']:.1f}–{100 * s['high']:.1f} %), "
+          f"{d['search_cpu_seconds']:.0f} "
           "CPU s of audit searches")
     for key, sub in out["by_start_families"].items():
         r = sub["all"]

@@ -138,5 +138,6 @@ def _print(d: dict) -> None:
     if s["unsearched"]:
         out.print(f"{s['unsearched']} entries with no audit search ended (not counted)",
                   highlight=False)
-    out.print(f"{d['wall_seconds']:.0f} s wall, {d['cpu_seconds']:.0f} CPU s; stored as audit "
+    out.print(f"{d['wall_seconds']:.0f} s wall, {d['cpu_seconds']:.0f} CPU s now "
+              f"({d['search_cpu_seconds']:.0f} CPU s of audit searches in all); stored as audit "
               f"{d['audit']} (stiffknots db grounds shows it)", highlight=False)

@@ -69,7 +69,7 @@ bead count, thickness and settings, the set whose states are grouped together (s
 lowest and mean ε.
 
 Table ``audits`` (version 2)
----------------------------
+----------------------------
 One row per audited ensemble and audit (:mod:`stiffknots.sweeps.audit`): a converged ground
 state searched again by independent searches. Key: ``UNIQUE(audit, knot, exclusion, beads,
 thickness_key, settings_hash)`` — an audit run again replaces its rows.
