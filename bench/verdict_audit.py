@@ -57,7 +57,8 @@ def main(argv: list[str] | None = None) -> None:
         e["start_families"] = len(starts)
     one = [e for e in d["entries"] if e["start_families"] == 1]
     several = [e for e in d["entries"] if e["start_families"] >= 2]
-    out = {"meta": run_meta(argv, note=a.note), "db": a.db, "audit": d["audit"], "params": d["params"],
+    out = {"meta": run_meta(argv, note=a.note), "db": a.db, "audit": d["audit"],
+           "params": d["params"],
            "converged": d["converged"], "summary": d["summary"],
            "by_start_families": {"one": summarise(one), "several": summarise(several)},
            "false": [{k: e[k] for k in ("knot", "exclusion", "epsilon", "state",

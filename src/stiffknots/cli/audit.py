@@ -69,7 +69,8 @@ def audit(
     docs/methods/verdicts.md."""
     from pathlib import Path
 
-    from stiffknots.store import Store
+    from stiffknots.problems import validate as V
+    from stiffknots.store import Store, StoreError
     from stiffknots.sweeps import MODELS
     from stiffknots.sweeps.audit import audit_budget, run_audit
 
@@ -79,14 +80,22 @@ def audit(
         raise UserError(f"--models must be tube and/or bead separated by commas, got "
                         f"{models!r}")
     audit_budget({"moves": 1000}, depth, replicas)  # --depth, --replicas checked first
-    if max_crossings is not None and not 3 <= max_crossings <= 13:
-        raise UserError(f"--max-crossings must be 3..13, got {max_crossings}")
+    V.integer("sample", sample, 1, 100_000)
+    V.seed(seed)
+    if max_crossings is not None:
+        V.integer("max_crossings", max_crossings, 3, 13)
     scheduler = cluster_options(scheduler, workers)
+    if not db.strip():
+        raise UserError("--db must name a results database file, got ''")
     if not Path(db).is_file():
         raise UserError(f"no results database at {db}: audit a database a sweep wrote "
                         "(stiffknots atlas --db ...), or give the right --db path")
     path = prepare_file(db, "--db")
-    with Store(path) as store, SweepProgress() as bar:
+    try:  # an empty or foreign file is refused, never given a schema
+        store = Store(path, create=False)
+    except StoreError as e:
+        raise UserError(f"--db {db}: {e}") from None
+    with store, SweepProgress() as bar:
         res = run_audit(store, models=names, sample=sample, seed=seed, depth=depth,
                         replicas=replicas, max_crossings=max_crossings, scheduler=scheduler,
                         workers=workers, listener=bar)
