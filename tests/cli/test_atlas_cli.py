@@ -77,6 +77,7 @@ def test_atlas_bad_paths_exit_2(tmp_path):
     assert rc == 2 and "not an SQLite database" in _error_line(err)
 
 
+@pytest.mark.slow  # a real sweep (≈ 30 s); test_db_states_and_grounds runs one in the default
 def test_atlas_json_shape(tmp_path):
     """A tiny sweep of one knot (2 replicas on 2 workers), then the pages and the JSON."""
     out, db = tmp_path / "atlas", tmp_path / "r.db"

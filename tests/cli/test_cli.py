@@ -265,6 +265,7 @@ def test_anneal_schedule_auto_is_the_dynamics_unless_a_monte_carlo_option():
         assert why in d["schedule_choice"] and d["max_rounds"] == 1
 
 
+@pytest.mark.slow  # ≈ 20 s; the langevin schedule is anneal's default, run by the fast tests
 def test_anneal_with_the_langevin_schedule():
     """`anneal --schedule langevin`: replicas of guarded Langevin dynamics, polished and
     verified, the table's unit in dynamics steps and no Monte Carlo acceptance."""

@@ -168,8 +168,9 @@ def _run_moves_with_cells(state, cell, moves, temperature, seed):
     return pos, cnt
 
 
-@pytest.mark.parametrize("cell", ["default", 0.4])
-@pytest.mark.parametrize("exclusion", ["bead", "tube"])
+@pytest.mark.parametrize(("exclusion", "cell"), [
+    ("bead", "default"), ("tube", "default"), ("bead", 0.4),
+    pytest.param("tube", 0.4, marks=pytest.mark.slow)])  # ≈ 20 s; the three others cover it
 def test_crankshaft_scan_meets_every_segment(exclusion, cell):
     # the crankshaft's guard scans only the cells of a box about each moved bead (kernel
     # docstring, Cell list); with cells far larger than the chain every segment lies in the

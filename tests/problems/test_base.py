@@ -117,6 +117,7 @@ def test_a_search_has_stalled_when_its_last_leg_found_nothing_lower():
     assert not stalled(rule, [a, l1, l2, l3], l3)
 
 
+@pytest.mark.slow  # two 7_4 solves (≈ 45 s); the rounds are covered fast by tests/problems
 def test_later_rounds_continue_the_lowest_search_and_start_new_ones():
     # rounds 1-2 start searches from the embeddings; round 3 continues the lowest of them by
     # basin hops from its polished chain (one leg a round) and starts one new search; every
