@@ -92,6 +92,7 @@ def test_anneal_json_small(tmp_path):
     assert d["structure"] == analyse_structure(best, d=2 ** -0.5).name
 
 
+@pytest.mark.slow  # ≈ 22 s: two annealings; plan_anneal's coarse stage is tested fast
 def test_anneal_coarse_to_fine(tmp_path):
     """--coarse: a first annealing at fewer beads starts the run; the result says so (its N,
     ε and width) and the chain is the requested N, verified; bad uses are one-line errors."""
@@ -112,6 +113,7 @@ def test_anneal_coarse_to_fine(tmp_path):
         assert rc == 2 and msg in err and "Traceback" not in err, err
 
 
+@pytest.mark.slow  # ≈ 45–80 s; `make run` runs the same study at the small budget
 def test_paper_tiny_writes_report(tmp_path):
     rc, out, err = run("paper", "--budget", "tiny", "--out", str(tmp_path), "--json")
     assert rc == 0, err
