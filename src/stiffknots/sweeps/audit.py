@@ -289,21 +289,21 @@ def run_audit(store: Store, *, models: Sequence[str] = ("tube",), sample: int = 
         res.cpu_seconds += sweep.cpu_seconds
         h = settings_hash(sweep_settings(model, budget, AUDIT_PROBLEM))
         for e in group:
-            ground = None
+            # this audit's searches only (its seed): another audit of the same depth shares
+            # their settings, and so the ensemble, but is not this audit's opinion
             searched = store.replicas(knot=e["knot"], exclusion=exclusion, beads=beads,
                                       thickness=thickness, settings_hash=h, seed=search_seed)
             res.search_cpu_seconds += sum(float(r["cpu_seconds"] or 0.0) for r in searched)
-            if searched:
-                ground = store.states(e["knot"], exclusion, beads, thickness, h,
-                                      structure=False)
-            g = ground["ground"] if ground else None
+            low = min(searched, key=lambda r: r["epsilon"]) if searched else None
+            g = None if low is None else {"epsilon": low["epsilon"], "name": (
+                f"CB(i={low['multiplicity']})" if low["shape"] == "CB" else low["shape"])}
             res.rows.append({
                 "audit": res.audit, "created": now, "version": __version__,
                 "knot": e["knot"], "exclusion": exclusion, "beads": beads,
                 "thickness_key": store_thickness_key(thickness),
                 "settings_hash": e["settings_hash"], "w_over_L": e["w_over_L"],
                 "epsilon": e["epsilon"], "state": e["state"], "audit_settings_hash": h,
-                "audit_seed": search_seed, "searches": ground["replicas"] if ground else 0,
+                "audit_seed": search_seed, "searches": len(searched),
                 "audit_epsilon": g["epsilon"] if g else None,
                 "audit_state": g["name"] if g else None,
                 "false_verdict": int(judge(e, g)), "params": canonical_json(params),
