@@ -19,7 +19,7 @@ import psutil
 import pytest
 
 from stiffknots.store import Store
-from stiffknots.sweeps import BUDGETS, parse_models, plan_sweep, sweep_settings
+from stiffknots.sweeps import BUDGETS, budget_of, parse_models, plan_sweep, sweep_settings
 
 D = 1 / math.sqrt(2)
 
@@ -384,8 +384,10 @@ def _check_resumed(tmp_path, before: int):
     assert rc == 0, err
     sw = json.loads(out)["sweep"]
     assert sw["skipped"] == before and sw["ran"] == 4 - before and not sw["failed"]
+    # the budget the command builds from SWEEP's options (the default's, its bead replicas
+    # Langevin dynamics, with --replicas and --moves)
     jobs = plan_sweep(["3_1", "4_1"], parse_models("bead"),
-                      BUDGETS["tiny"].__class__("custom", 2, 2_000_000), seed=0)
+                      budget_of("default", replicas=2, moves=2_000_000), seed=0)
     with Store(tmp_path / "r.db", create=False) as st:
         assert st.keys() == {j.key for j in jobs}
         assert st.count() == 4 and st.check()["ok"]

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from stiffknots.problems.base import Problem, Replica, stalled, verdict
+from stiffknots.problems.base import AGREE, Problem, Replica, stalled, verdict
 from stiffknots.problems.closed import anneal
 
 
@@ -48,6 +48,36 @@ def test_verdict_counts_the_lowest_state_only():
     ok, _ = verdict(_Rule(agree=3), [_r("80", 147.3)] * 2)
     assert not ok
     assert verdict(rule, []) == (False, "no replica finished")
+
+
+def test_two_searches_sharing_a_funnel_above_the_ground_are_no_tube_verdict():
+    # 8_13 under the tube model (w = 1/√2, N = 150), as measured: 5 of 16 searches of 5 M moves
+    # end in the funnel at 278.5, the rest at 216.3–216.8. Two searches in the funnel were a
+    # verdict under a rule of two, 29 % above the ground; the tube's rule asks for a third,
+    # which lands in the ground's funnel 11 times in 16.
+    tube = _Rule(agree=AGREE["tube"])
+    funnel = [_r("other", 278.54), _r("other", 278.42)]
+    assert verdict(_Rule(agree=2), funnel)[0]  # what a rule of two said
+    ok, why = verdict(tube, funnel)
+    assert not ok and "2 of 2" in why and "3 needed" in why
+    third = _r("other", 216.36)
+    ok, why = verdict(tube, [*funnel, third])
+    assert not ok and "(other, 216.36)" in why and "1 of 3" in why  # the ground moved down
+    ok, why = verdict(tube, [*funnel, third, _r("other", 216.35), _r("other", 216.41)])
+    assert ok and "3 of 5" in why
+    # the bead rule keeps two (its ground is the lowest state found, an upper bound)
+    assert AGREE == {"bead": 2, "tube": 3}
+
+
+def test_a_tube_run_asks_for_three_searches_a_bead_run_for_two():
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.problems.closed import ClosedAnneal
+
+    tube = ClosedAnneal("3_1", moves=1000, params=MoveParams(exclusion="tube", w=0.75))
+    assert tube.agree == 3
+    assert ClosedAnneal("3_1", moves=1000).agree == 2
+    assert ClosedAnneal("3_1", moves=1000, params=MoveParams(exclusion="tube", w=0.75),
+                        agree=2).agree == 2  # asked for
 
 
 def test_tube_route_searches_confirm_but_do_not_certify():

@@ -23,6 +23,7 @@ from stiffknots.sweeps.audit import (
     summarise,
     wilson_interval,
 )
+from stiffknots.sweeps.convergence import min_searches
 from stiffknots.width import Width
 
 TUBE = parse_models("tube")[0]  # the default tube, w = 1/√2 as the atlas runs it
@@ -87,15 +88,16 @@ def test_the_audit_seed_is_not_the_sweep_seed():
     assert 0 <= audit_seed(123) < 2 ** 63
 
 
-def _plant(store: Store, knot: str, epsilon: float, moves: int = 1000, rows: int = 3,
-           converged_pair: bool = True) -> None:
-    """A sweep-like tube ensemble of ``knot`` whose ground is ``epsilon`` (reached by two
-    searches, one from every default start: a converged verdict) — the chains are random (the
-    audit reads only ε)."""
+def _plant(store: Store, knot: str, epsilon: float, moves: int = 1000, rows: int = 4,
+           converged: bool = True) -> None:
+    """A sweep-like tube ensemble of ``knot`` whose ground is ``epsilon`` (reached by the
+    searches the tube's verdict needs, one from every default start: a converged verdict) —
+    the chains are random (the audit reads only ε)."""
     settings = sweep_settings(TUBE, budget_of("tiny", moves=moves))
     starts = ["braid", "cage", "eighty"]
+    need = min_searches("tube")
     for r in range(rows):
-        eps = epsilon if (r < 2 and converged_pair) or r == 0 else epsilon * 1.1
+        eps = epsilon if (r < need and converged) or r == 0 else epsilon * 1.1
         store.put({"knot": knot, "exclusion": "tube", "beads": 150, "thickness": TUBE.thickness,
                    "seed": 0, "replica": r, "settings": settings, "epsilon": eps,
                    "min_segment_distance": 0.8, "wall_seconds": 1.0, "shape": "other",
@@ -107,7 +109,7 @@ def test_the_draw_is_seeded_and_takes_converged_verdicts_only(tmp_path):
     with Store(tmp_path / "a.db") as st:
         for k, eps in [("3_1", 90.0), ("4_1", 130.0), ("5_1", 150.0), ("5_2", 160.0)]:
             _plant(st, k, eps)
-        _plant(st, "6_1", 170.0, converged_pair=False)  # one search at the ground: not drawn
+        _plant(st, "6_1", 170.0, converged=False)  # one search at the ground: not drawn
         a, n = sample_entries(st, sample=2, seed=4)
         b, _ = sample_entries(st, sample=2, seed=4)
         assert n == 4 and [r["knot"] for r in a] == [r["knot"] for r in b]
@@ -143,7 +145,7 @@ def test_an_audit_finds_the_planted_false_verdict_and_stores_it(tmp_path):
         audit_rows = st.replicas(problem=AUDIT_PROBLEM)
         assert len(audit_rows) == 4 and all(r["knot_verified"] for r in audit_rows)
         assert {r["seed"] for r in audit_rows} == {audit_seed(0)}
-        assert len(st.replicas(problem="anneal")) == 6
+        assert len(st.replicas(problem="anneal")) == 8
     # db grounds shows the verdicts with the audit beside them
     g = subprocess.run([sys.executable, "-m", "stiffknots.cli", "db", "--db", str(db), "grounds",
                         "--json"], capture_output=True, text=True, timeout=120)

@@ -24,7 +24,7 @@ from stiffknots.sweeps import (
     resolve_knots,
     sweep_settings,
 )
-from stiffknots.sweeps.convergence import hits
+from stiffknots.sweeps.convergence import ensemble_converged, hits
 from stiffknots.sweeps.plan import build_jobs, sweep_starts
 
 D = 1 / math.sqrt(2)
@@ -249,6 +249,46 @@ def test_seeded_replicas_confirm_a_ground_state_but_do_not_certify_it(tmp_path):
                 "epsilon": 79.02, "shape": "CB", "multiplicity": 2, "start": "braid",
                 "knot_verified": True, "min_segment_distance": 0.7, "wall_seconds": 1.0}, x)
         assert is_converged(st.states("3_1")["ground"])
+
+
+def test_the_tube_rule_asks_for_three_searches_and_the_sweep_adds_what_it_lacks(tmp_path):
+    """The tube's verdict needs three searches at the ground (8_13's 278.5 funnel drew two of
+    two, docs/methods/verdicts.md), the bead rule's two; an unconverged tube ensemble gets as
+    many replicas as its ground lacks where two agree — one —, else ``step``."""
+    from stiffknots.sweeps.convergence import min_searches
+    from stiffknots.sweeps.run import searches_lacking
+
+    assert (min_searches("tube"), min_searches("bead"), min_searches(None)) == (3, 2, 2)
+    two = {"epsilon": 278.42, "eps_all": [278.42, 278.54]}
+    assert is_converged(two, "bead") and not is_converged(two, "tube")
+    assert is_converged({**two, "exclusion": "bead"})  # a ground_states row names its model
+    assert not is_converged({**two, "exclusion": "tube"})
+    assert is_converged({"epsilon": 216.33, "eps_all": [216.33, 216.36, 216.41]}, "tube")
+    x = np.load(Path(__file__).resolve().parent.parent / "data" / "analysis"
+                / "3_1_seed1_r0.npy")
+    tube = parse_models("tube")[0]
+    settings = sweep_settings(tube, budget_of("tiny"))
+    h = settings_hash(settings)
+    with Store(tmp_path / "s.db") as st:
+        assert searches_lacking(st, "3_1", tube, h, 2) == 2  # nothing stored
+
+        def put(replica, eps):
+            st.put({"knot": "3_1", "exclusion": "tube", "beads": 150,
+                    "thickness": tube.thickness, "seed": 0, "replica": replica,
+                    "settings": settings, "epsilon": eps, "shape": "CB", "multiplicity": 2,
+                    "start": "braid", "knot_verified": True, "min_segment_distance": 0.8,
+                    "wall_seconds": 1.0}, x)
+
+        put(0, 79.06)
+        put(1, 79.50)
+        assert searches_lacking(st, "3_1", tube, h, 2) == 2  # one search at the ground: step
+        put(2, 79.07)
+        assert searches_lacking(st, "3_1", tube, h, 2) == 1  # two agree: one more
+        assert searches_lacking(st, "3_1", tube, h, 1) == 1
+        states = st.states("3_1")
+        assert not ensemble_converged(states)
+        put(3, 79.061)
+        assert ensemble_converged(st.states("3_1"))
 
 
 def test_model_validation():

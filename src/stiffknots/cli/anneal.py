@@ -82,7 +82,9 @@ def anneal(
     replicas: ReplicasOpt = 2,
     rounds: Annotated[int | None, typer.Option(
         help="Most rounds of --replicas replicas: after each round the run stops if the "
-             "lowest state (shape, ε within 0.1 %) was reached by 2 independent searches; "
+             "lowest state (shape, ε within 0.1 %) was reached by 2 independent searches (3 "
+             "with --exclusion tube, whose funnels above the ground two searches share "
+             "too often); "
              "with the Monte Carlo schedules rounds after the second continue the lowest "
              "searches by basin hops while they improve; 1 = a fixed budget (default: 64 "
              "with the langevin schedule, 8 with the others).",

@@ -138,6 +138,21 @@ class Job:
 
 DEFAULT_MOVES = AnnealSettings.moves  # 15 M at N = 150: relaxation + annealing (schedules.py)
 
+#: Independent searches that must reach the lowest state before a verdict, per exclusion model
+#: (:func:`verdict`; the sweeps' rule too, :mod:`stiffknots.sweeps.convergence`). The tube
+#: model's annealing lands in a funnel above the ground often enough that two searches agree
+#: on it: measured in the tube atlas through 8 crossings (default budget, seed 0), 3 of 31
+#: verdicts of two searches were beaten by other seeds (8_13 at 278.54 above 216.33, where 5 of
+#: 16 searches of 5 M moves end in the 278.5 funnel); a third search removed two of them
+#: (docs/methods/verdicts.md). The bead rule keeps two: its Langevin ensembles run up to 16
+#: replicas and its ground is reported as the lowest state found, an upper bound.
+AGREE = {"bead": 2, "tube": 3}
+
+
+def agree_for(exclusion: str | None) -> int:
+    """The searches a verdict needs under ``exclusion`` (:data:`AGREE`; 2 for any other)."""
+    return AGREE.get(exclusion or "", 2)
+
 
 def default_moves(n_beads: int) -> int:
     """The default budget of a replica of N beads: 100,000 attempted moves per bead (15 M at

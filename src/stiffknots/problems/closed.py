@@ -26,6 +26,7 @@ from stiffknots.problems.base import (
     Problem,
     Replica,
     ReplicaSet,
+    agree_for,
     default_moves,
     observe_shape,
     solve,
@@ -127,7 +128,8 @@ class ClosedAnneal(Problem):
                  checkpoint_dir: str | Path | None = None, resume: bool = False,
                  checkpoint_seconds: float | None = 60.0,
                  start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
-                 agree: int = 2, rel_tol: float = 1e-3, initial=None, polish: bool = True,
+                 agree: int | None = None, rel_tol: float = 1e-3, initial=None,
+                 polish: bool = True,
                  tube_route: bool = False):
         from stiffknots.theory.bounds import closed_bounds
 
@@ -139,7 +141,9 @@ class ClosedAnneal(Problem):
             knot = knot if isinstance(knot, Knot) and knot.name == name else name
             params = params or p0
         self._setup(knot, replicas, seed, beads)
-        self._verdict_rule(rounds, agree, rel_tol)
+        # the searches a verdict needs: the exclusion model's (base.AGREE: 3 for the tube)
+        self._verdict_rule(rounds, agree_for((params or MoveParams()).exclusion)
+                           if agree is None else agree, rel_tol)
         self.polish = bool(polish)
         if resume and checkpoint_dir is None:
             raise InvalidParameter("checkpoint_dir", None, "given when resume=True",
@@ -280,7 +284,7 @@ def anneal(
     checkpoint_seconds: float | None = 60.0,
     start: str | Sequence[str] = "all",
     rounds: int = DEFAULT_ROUNDS,
-    agree: int = 2,
+    agree: int | None = None,
     rel_tol: float = 1e-3,
     on_progress: Callable[[dict], None] | None = None,
     initial=None,
@@ -335,8 +339,10 @@ def anneal(
     rounds, agree, rel_tol
         The convergence rule: after each round of ``replicas`` replicas,
         the run stops when the lowest state (its shape class and ε within ``rel_tol``) was
-        reached by at least ``agree`` replicas, and otherwise runs another round, up to
-        ``rounds`` rounds; ``rounds=1`` is a fixed budget. The result says ``converged`` and
+        reached by at least ``agree`` independent searches (default: the exclusion model's,
+        :data:`stiffknots.problems.base.AGREE` — 2 for the bead rule, 3 for the tube), and
+        otherwise runs another round, up to ``rounds`` rounds; ``rounds=1`` is a fixed
+        budget. The result says ``converged`` and
         why (:func:`stiffknots.problems.base.verdict`).
     on_progress : callable or None
         Receives progress records of the running replicas (moves done, best ε).

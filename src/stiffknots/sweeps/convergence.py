@@ -3,7 +3,8 @@
 The rule is the solver's (:func:`stiffknots.problems.base.verdict`): the ground state of an
 ensemble — the replicas of one knot, model, width, N and settings (:meth:`Store.states
 <stiffknots.store.sqlite.Store.states>`) — is *converged* when at least
-:data:`MIN_REPLICAS` = 2 independent searches reached it (a continuation leg counts with
+:func:`min_searches` independent searches reached it — 3 for the tube model, 2 for the bead
+rule (:data:`stiffknots.problems.base.AGREE`) — (a continuation leg counts with
 the search it continued, :mod:`stiffknots.sweeps.legs`): the same shape class and
 multiplicity (§VII), ε within :data:`REL_TOL` = 0.1 % of the lowest (every replica is
 polished to its local minimum, so replicas of one minimum agree far better than that): two
@@ -32,18 +33,28 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from stiffknots.problems.base import AGREE
 from stiffknots.store.rows import SEEDED_START  # the start of a seeded replica
 
 __all__ = ["MIN_REPLICAS", "REL_TOL", "RULE", "ensemble_converged", "hits", "is_converged",
-           "own_hits", "untried_starts"]
+           "min_searches", "own_hits", "untried_starts"]
 
 
-#: Replicas that must reach the ground state.
+#: Searches that must reach the ground state where the model is not known (the bead rule's).
 MIN_REPLICAS = 2
 #: Largest relative spread of their ε, (ε_max − ε_min)/ε_min.
 REL_TOL = 1e-3
+
+
+def min_searches(exclusion: str | None) -> int:
+    """The independent searches a verdict needs under ``exclusion`` (the solver's
+    :data:`~stiffknots.problems.base.AGREE`; :data:`MIN_REPLICAS` for any other)."""
+    return AGREE.get(exclusion or "", MIN_REPLICAS)
+
+
 #: The rule in words (for reports).
-RULE = (f"ground state reached by ≥ {MIN_REPLICAS} independent searches (replicas; a "
+RULE = (f"ground state reached by ≥ {AGREE['tube']} independent searches under the "
+        f"tube model, ≥ {AGREE['bead']} under the bead rule (replicas; a "
         f"continuation leg counts with the search it continued; same shape) with ε within "
         f"{REL_TOL:.1%} of the lowest, one of them the model's own search (not seeded from "
         f"a tube replica), after a replica from every default start")
@@ -90,11 +101,15 @@ def own_hits(ground: Mapping[str, Any] | None) -> int:
                for e in eps if float(e) - lo <= REL_TOL * lo)
 
 
-def is_converged(ground: Mapping[str, Any] | None) -> bool:
+def is_converged(ground: Mapping[str, Any] | None, exclusion: str | None = None) -> bool:
     """Whether a ground state (a state of :meth:`.Store.states`: ``epsilon`` — the lowest ε —,
-    ``eps_all`` and ``eps_by_start``) satisfies the rule of the module docstring: at least
-    :data:`MIN_REPLICAS` hits, one of them the ensemble's own search."""
-    return hits(ground) >= MIN_REPLICAS and own_hits(ground) >= 1
+    ``eps_all`` and ``eps_by_start``; or a row of :meth:`.Store.ground_states`) satisfies the
+    rule of the module docstring: at least :func:`min_searches` hits under its exclusion
+    model (``exclusion``, else the row's own ``exclusion``), one of them the ensemble's own
+    search."""
+    if exclusion is None and ground:
+        exclusion = ground.get("exclusion")
+    return hits(ground) >= min_searches(exclusion) and own_hits(ground) >= 1
 
 
 def untried_starts(states: Mapping[str, Any], starts: Sequence[str] | None = None) -> list[str]:
@@ -131,4 +146,5 @@ def ensemble_converged(states: Mapping[str, Any], starts: Sequence[str] | None =
     braid and cage agree at the cage's 128.384 while every search from the 80 ends lower
     (docs/history.md)."""
     ground = states.get("ground") if "ground" in states else states
-    return is_converged(ground) and not untried_starts(states, starts)
+    return (is_converged(ground, states.get("exclusion"))
+            and not untried_starts(states, starts))

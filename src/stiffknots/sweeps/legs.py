@@ -8,15 +8,15 @@ continues one stored search by the basin hops of the solver
 hop from the lowest polished chain so far) — the way ``anneal``'s later rounds continue its
 searches (:func:`stiffknots.problems.base.solve`).
 
-Which search. The verdict asks for two independent searches at the lowest state
-(:mod:`stiffknots.sweeps.convergence`). Where the lowest search sits alone, the search that can
-confirm it is the *second-lowest*: a leg continues the second-lowest search (by its lowest
-replica, a leg of it included), or the lowest where there is no other. If the leg reaches the
-lowest state, two searches agree; if it goes below, the next leg continues the former lowest,
-now second. Measured on the 249-knot atlas run (tube w = 1/√2, N = 150; one leg from the
-second-lowest replica of six near misses whose two lowest searches lay 0.10–0.16 % apart):
-4 of 6 legs ended within 0.1 % of the lowest (10_25, 10_136, 10_165) or below it by less
-(10_24, −0.08 %), one stayed where it began (10_28), one went 0.77 % below (9_39)
+Which search. The verdict asks for independent searches at the lowest state (three under
+the tube model, :mod:`stiffknots.sweeps.convergence`). Where the lowest search sits alone, the
+search that can confirm it is the *second-lowest*: a leg continues the second-lowest search
+(by its lowest replica, a leg of it included), or the lowest where there is no other. If the
+leg reaches the lowest state, two searches agree; if it goes below, the next leg continues the
+former lowest, now second. Measured on the 249-knot atlas run (tube w = 1/√2, N = 150; one
+leg from the second-lowest replica of six near misses whose two lowest searches lay 0.10–0.16 %
+apart): 4 of 6 legs ended within 0.1 % of the lowest (10_25, 10_136, 10_165) or below it by
+less (10_24, −0.08 %), one stayed where it began (10_28), one went 0.77 % below (9_39)
 (docs/history.md).
 
 Langevin legs of the bead rule. A Langevin bead ensemble (the default budget's) still not

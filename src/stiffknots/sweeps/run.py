@@ -21,7 +21,8 @@ comes back to the client, which
 
 Replicas until converged. With ``max_replicas`` above the budget's replicas, a (knot, model)
 whose replicas have all ended without a converged ground state
-(:mod:`stiffknots.sweeps.convergence`) gets ``step`` more replicas (the budget's moves and
+(:mod:`stiffknots.sweeps.convergence`) gets ``step`` more replicas — fewer where two searches
+agree and the rule asks for three, :func:`searches_lacking` — (the budget's moves and
 settings: the same ensemble), and so on up to ``max_replicas``; the n = i knots, whose
 circular braids two replicas agree on at once, then cost no more than they need. A bead
 ensemble that tube replicas seed is judged once its tube ensembles have settled and been
@@ -240,6 +241,28 @@ def ensemble_converged(store: Store, knot: str, model: Width, settings_hash: str
     return converged_with_every_start(st)
 
 
+def searches_lacking(store: Store, knot: str, model: Width, settings_hash: str,
+                     step: int) -> int:
+    """The replicas to add next to one stored, unconverged (knot, model) ensemble: ``step``;
+    but where :data:`~stiffknots.sweeps.convergence.MIN_REPLICAS` (two) searches or more
+    already agree on its ground state and its model's rule asks for more
+    (:func:`~stiffknots.sweeps.convergence.min_searches`: three for the tube), only as many
+    as the verdict lacks, at most ``step`` — a tube ensemble whose first two replicas agree
+    gets one more, not two. ``step`` while a default start has had no replica (the verdict
+    waits for it) or nothing is stored."""
+    from stiffknots.sweeps.convergence import MIN_REPLICAS, hits, min_searches, untried_starts
+
+    if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
+                       thickness=model.thickness, settings_hash=settings_hash):
+        return step
+    st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash,
+                      structure=False)
+    have = hits(st.get("ground"))
+    if untried_starts(st) or have < MIN_REPLICAS:
+        return step
+    return max(1, min(step, min_searches(model.exclusion) - have))
+
+
 def expected_todo(groups: Mapping[tuple[str, str], dict], todo: int, base: int) -> float:
     """Jobs a sweep is expected to run in all: the ``todo`` planned so far, plus, for every
     (knot, model) not yet settled, the replicas beyond the ``base`` (the budget's) that the
@@ -324,7 +347,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
         added replicas have the budget's moves and settings: they join the same ensemble, and
         a resumed sweep skips them too.
     step : int
-        Replicas added at a time.
+        Most replicas added at a time (fewer where the ground state lacks fewer searches for
+        its verdict: :func:`searches_lacking`).
     listener : SweepListener, optional
         Told of the plan, the progress and each finished job.
     run : bool
@@ -402,7 +426,8 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
         top = most[g["model"].exclusion]
         while g["replicas"] < top and not ensemble_converged(
                 store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion]):
-            n = min(top, g["replicas"] + step)
+            n = min(top, g["replicas"] + searches_lacking(
+                store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion], step))
             more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
                               seed, problem)[g["replicas"]:]
             more = [replace(j, start=favoured_start(store, j, g["replicas"])) for j in more]

@@ -89,7 +89,8 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
              "ε = E L / C of the lowest state found, at the width in the next column"),
             ("width", "text", "", "the finite width the ε was computed at"),
             ("converged", "text", "",
-             "whether two independent searches reached the lowest ε found (within 0.1 %): a "
+             "whether independent searches reached the lowest ε found (within 0.1 %; three "
+             "under the tube model, two under the bead rule): a "
              "statement about the searches, not proof that no lower state exists; how often "
              "a deeper search found lower: docs/methods/verdicts.md. audit: what "
              "stiffknots audit found when it searched the verdict again"),
