@@ -22,7 +22,7 @@ budget     replicas  moves       most  legs  bead rule              CPU s per (k
 =========  ========  ==========  ====  ====  =====================  ========================
 tiny       2         200,000     2     0     annealing              ≈ 1 — a smoke test
 small      2         5,000,000   2     0     annealing              ≈ 10
-default    2         15,000,000  6     2     Langevin 10⁶ steps,    tube ≈ 20 converged at 2,
+default    2         15,000,000  6     2     Langevin 10⁶ steps,    tube ≈ 30 converged at 3,
                                              up to 16, then 4       ≈ 60 at 6 (a leg ≈ 10–45);
                                              Langevin legs          bead ≈ 4 a replica, 1.3 a
                                                                     leg
@@ -40,7 +40,8 @@ The tube ensembles' settings, and so their stored replicas, are the same under b
 
 Measurements behind the tube rows (``bench/defaults_survey.py``: the same replicas — 15 M
 moves, polished — through ``stiffknots anneal``, 35 knots through 8 crossings): 7–13 CPU
-seconds per replica; about half the knots converge with their first two replicas. What the
+seconds per replica; about half the knots' first two replicas agree, and their verdict then
+needs one replica more (the tube's rule of three searches, :mod:`.convergence`). What the
 whole atlas takes at each budget: docs/atlas.md.
 """
 
