@@ -295,6 +295,17 @@ def verdict_audit(d: dict) -> list[str]:
     return out
 
 
+def verdict_rules(d: dict) -> list[str]:
+    out = ["| run | rule | converged | false (> 0.1 % above the lowest state found) | replicas "
+           "| CPU s |", "| --- | --- | --- | --- | --- | --- |"]
+    for r in d["runs"]:
+        false = ", ".join(f"{e['knot']} +{100 * e['above']:.1f} %" for e in r["false"])
+        out.append(f"| {r['label']} | {r['rule']} searches | {r['converged']} of {r['knots']} "
+                   f"| {len(r['false'])}{': ' + false if false else ''} | {r['replicas']} "
+                   f"| {r['cpu_seconds']:,.0f} |")
+    return out
+
+
 #: (file name, title, what it measures, the script, renderer), in the order of the page
 BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
     ("defaults_survey", "`stiffknots anneal` with its defaults, every prime knot through 8 "
@@ -325,6 +336,10 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
     ("verdict_audit", "The audit of the verdicts", "how often a converged ground state is "
      "beaten by independent searches (`stiffknots audit`), with its 95 % interval",
      "python bench/verdict_audit.py DB", verdict_audit),
+    ("verdict_rules", "Verdict rules and search budgets side by side",
+     "tube atlases of the same knots under other rules and budgets, each verdict against the "
+     "lowest state any of them found", "python bench/verdict_rules.py LABEL=DB:K ... --also "
+     "DIR", verdict_rules),
     ("small_jobs", "Small jobs", "wall and CPU seconds of short commands as typed (fresh "
      "processes, kernels cached)", "python bench/small_jobs.py", small_jobs),
     ("last_run", "The kernel and the time to the paper's energies (`make bench`)",

@@ -1,0 +1,102 @@
+"""Verdict rules and search budgets side by side: several tube atlases of the same knots (other
+budgets, other rules), each verdict judged against the lowest state that *any* of them — or a
+further run — found for its knot.
+
+A verdict is counted false when its ground lies more than 0.1 % (the verdict's own tolerance)
+above that lowest state. This is not an audit (``stiffknots audit`` searches every verdict
+again); it pools what the runs found, so a run is judged by the others' searches too. The rule
+of each database is the tube's rule of k searches (``problems.base.AGREE["tube"]`` set to k
+while it is judged); its CPU seconds are those of its stored replicas.
+
+    python bench/verdict_rules.py LABEL=DB:K [LABEL=DB:K ...] [--also DIR_OR_JSON ...]
+
+``--also`` adds lowest states from ``stiffknots anneal --json`` outputs (a folder of them) or a
+``bench/verdict_audit.json`` (its entries' ``audit_epsilon``). Writes bench/verdict_rules.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from benchmeta import run_meta, stable_path
+
+TOL = 1e-3
+
+
+def _lowest_from(path: Path, low: dict[str, float]) -> None:
+    files = sorted(path.glob("*.json")) if path.is_dir() else [path]
+    for f in files:
+        try:
+            d = json.loads(f.read_text())
+        except (OSError, ValueError):
+            continue
+        if "entries" in d:  # an audit
+            pairs = [(e["knot"], e.get("audit_epsilon")) for e in d["entries"]]
+        elif "replicas" in d:  # anneal --json
+            pairs = [(d["knot"], r["epsilon"]) for r in d["replicas"]]
+        else:
+            continue
+        for k, e in pairs:
+            if e is not None:
+                low[k] = min(low.get(k, float("inf")), float(e))
+
+
+def main(argv: list[str] | None = None) -> None:
+    import stiffknots.problems.base as base
+    from stiffknots.store.sqlite import Store
+    from stiffknots.sweeps.convergence import ensemble_converged
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("runs", nargs="+", help="LABEL=DB:K (K: searches the tube verdict needs)")
+    ap.add_argument("--also", nargs="*", default=[])
+    ap.add_argument("--note", default=None, help="How the databases were made (in the meta).")
+    a = ap.parse_args(argv)
+    runs = []
+    for spec in a.runs:
+        label, rest = spec.split("=", 1)
+        db, k = rest.rsplit(":", 1)
+        runs.append((label, db, int(k)))
+    low: dict[str, float] = {}
+    for p in a.also:
+        _lowest_from(Path(p), low)
+    states = {}
+    for label, db, _ in runs:
+        with Store(db, readonly=True) as st:
+            for knot in st.knots():
+                s = st.states(knot, exclusion="tube", structure=False)
+                rows = st.replicas(knot=knot, exclusion="tube")
+                states[(label, knot)] = (s, len(rows), sum(r["cpu_seconds"] or 0 for r in rows))
+                low[knot] = min(low.get(knot, float("inf")), s["ground"]["epsilon"])
+    out, saved = [], base.AGREE["tube"]
+    try:
+        for label, db, k in runs:
+            base.AGREE["tube"] = k
+            mine = {kn: v for (lb, kn), v in states.items() if lb == label}
+            conv, false = [], []
+            for knot, (s, _, _) in mine.items():
+                if ensemble_converged(s):
+                    conv.append(knot)
+                    g = s["ground"]["epsilon"]
+                    if g > low[knot] * (1 + TOL):
+                        false.append({"knot": knot, "epsilon": g, "lowest": low[knot],
+                                      "above": g / low[knot] - 1})
+            out.append({"label": label, "db": db, "rule": k, "knots": len(mine),
+                        "converged": len(conv), "false": sorted(false, key=lambda e: -e["above"]),
+                        "replicas": sum(v[1] for v in mine.values()),
+                        "cpu_seconds": sum(v[2] for v in mine.values())})
+    finally:
+        base.AGREE["tube"] = saved
+    for r in out:
+        print(f"{r['label']}: rule of {r['rule']}, converged {r['converged']} of {r['knots']}, "
+              f"false {len(r['false'])} ("
+              + ", ".join(f"{e['knot']} +{100 * e['above']:.1f} %" for e in r["false"])
+              + f"), {r['replicas']} replicas, {r['cpu_seconds']:.0f} CPU s")
+    doc = {"meta": run_meta(argv, note=a.note),
+           "tolerance": TOL, "runs": out, "lowest": low}
+    stable_path("verdict_rules").write_text(json.dumps(doc, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
