@@ -256,7 +256,7 @@ def test_the_tube_rule_asks_for_three_searches_and_the_sweep_adds_what_it_lacks(
     two, docs/methods/verdicts.md), the bead rule's two; an unconverged tube ensemble gets as
     many replicas as its ground lacks where two agree — one —, else ``step``."""
     from stiffknots.sweeps.convergence import min_searches
-    from stiffknots.sweeps.run import searches_lacking
+    from stiffknots.sweeps.run import _stored_states, searches_lacking
 
     assert (min_searches("tube"), min_searches("bead"), min_searches(None)) == (3, 2, 2)
     two = {"epsilon": 278.42, "eps_all": [278.42, 278.54]}
@@ -270,7 +270,11 @@ def test_the_tube_rule_asks_for_three_searches_and_the_sweep_adds_what_it_lacks(
     settings = sweep_settings(tube, budget_of("tiny"))
     h = settings_hash(settings)
     with Store(tmp_path / "s.db") as st:
-        assert searches_lacking(st, "3_1", tube, h, 2) == 2  # nothing stored
+
+        def lacking(step):
+            return searches_lacking(_stored_states(st, "3_1", tube, h), tube, step)
+
+        assert lacking(2) == 2  # nothing stored
 
         def put(replica, eps):
             st.put({"knot": "3_1", "exclusion": "tube", "beads": 150,
@@ -281,10 +285,10 @@ def test_the_tube_rule_asks_for_three_searches_and_the_sweep_adds_what_it_lacks(
 
         put(0, 79.06)
         put(1, 79.50)
-        assert searches_lacking(st, "3_1", tube, h, 2) == 2  # one search at the ground: step
+        assert lacking(2) == 2  # one search at the ground: step
         put(2, 79.07)
-        assert searches_lacking(st, "3_1", tube, h, 2) == 1  # two agree: one more
-        assert searches_lacking(st, "3_1", tube, h, 1) == 1
+        assert lacking(2) == 1  # two agree: one more
+        assert lacking(1) == 1
         states = st.states("3_1")
         assert not ensemble_converged(states)
         put(3, 79.061)

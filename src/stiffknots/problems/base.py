@@ -141,17 +141,17 @@ DEFAULT_MOVES = AnnealSettings.moves  # 15 M at N = 150: relaxation + annealing 
 #: Independent searches that must reach the lowest state before a verdict, per exclusion model
 #: (:func:`verdict`; the sweeps' rule too, :mod:`stiffknots.sweeps.convergence`). The tube
 #: model's annealing lands in a funnel above the ground often enough that two searches agree
-#: on it: measured in the tube atlas through 8 crossings (default budget, seed 0), 3 of 31
-#: verdicts of two searches were beaten by other seeds (8_13 at 278.54 above 216.33, where 5 of
-#: 16 searches of 5 M moves end in the 278.5 funnel); a third search removed two of them
+#: on it (8_13: 5 of 16 searches of 5 M moves end at 278.5, the ground is 216.3); a third
+#: search removed most such verdicts in the tube atlas through 8 crossings
 #: (docs/methods/verdicts.md). The bead rule keeps two: its Langevin ensembles run up to 16
 #: replicas and its ground is reported as the lowest state found, an upper bound.
 AGREE = {"bead": 2, "tube": 3}
 
 
 def agree_for(exclusion: str | None) -> int:
-    """The searches a verdict needs under ``exclusion`` (:data:`AGREE`; 2 for any other)."""
-    return AGREE.get(exclusion or "", 2)
+    """The searches a verdict needs under ``exclusion`` (:data:`AGREE`; the bead rule's for
+    any other)."""
+    return AGREE.get(exclusion or "", AGREE["bead"])
 
 
 def default_moves(n_beads: int) -> int:

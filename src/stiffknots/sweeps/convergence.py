@@ -33,7 +33,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from stiffknots.problems.base import AGREE
+from stiffknots.problems.base import AGREE, agree_for
 from stiffknots.store.rows import SEEDED_START  # the start of a seeded replica
 
 __all__ = ["MIN_REPLICAS", "REL_TOL", "RULE", "ensemble_converged", "hits", "is_converged",
@@ -47,9 +47,9 @@ REL_TOL = 1e-3
 
 
 def min_searches(exclusion: str | None) -> int:
-    """The independent searches a verdict needs under ``exclusion`` (the solver's
-    :data:`~stiffknots.problems.base.AGREE`; :data:`MIN_REPLICAS` for any other)."""
-    return AGREE.get(exclusion or "", MIN_REPLICAS)
+    """The independent searches a verdict needs under ``exclusion``: the solver's rule
+    (:func:`~stiffknots.problems.base.agree_for`)."""
+    return agree_for(exclusion)
 
 
 #: The rule in words (for reports).

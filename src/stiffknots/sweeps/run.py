@@ -228,22 +228,27 @@ def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | No
     return store.put(row, coords), row
 
 
+def _stored_states(store: Store, knot: str, model: Width, settings_hash: str) -> dict | None:
+    """:meth:`Store.states` of one (knot, model) ensemble; None when nothing is stored."""
+    if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
+                       thickness=model.thickness, settings_hash=settings_hash):
+        return None
+    return store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash,
+                        structure=False)
+
+
 def ensemble_converged(store: Store, knot: str, model: Width, settings_hash: str) -> bool:
     """Whether one stored (knot, model) ensemble is converged — its ground state by the rule,
     after a replica from every default start
     (:func:`~stiffknots.sweeps.convergence.ensemble_converged`); False when nothing is
     stored."""
-    if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
-                       thickness=model.thickness, settings_hash=settings_hash):
-        return False
-    st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash,
-                      structure=False)
-    return converged_with_every_start(st)
+    st = _stored_states(store, knot, model, settings_hash)
+    return st is not None and converged_with_every_start(st)
 
 
-def searches_lacking(store: Store, knot: str, model: Width, settings_hash: str,
-                     step: int) -> int:
-    """The replicas to add next to one stored, unconverged (knot, model) ensemble: ``step``;
+def searches_lacking(st: Mapping[str, Any] | None, model: Width, step: int) -> int:
+    """The replicas to add next to one stored, unconverged (knot, model) ensemble (``st``:
+    its :meth:`Store.states`, None when nothing is stored): ``step``;
     but where :data:`~stiffknots.sweeps.convergence.MIN_REPLICAS` (two) searches or more
     already agree on its ground state and its model's rule asks for more
     (:func:`~stiffknots.sweeps.convergence.min_searches`: three for the tube), only as many
@@ -252,11 +257,8 @@ def searches_lacking(store: Store, knot: str, model: Width, settings_hash: str,
     waits for it) or nothing is stored."""
     from stiffknots.sweeps.convergence import MIN_REPLICAS, hits, min_searches, untried_starts
 
-    if not store.count(knot=knot, exclusion=model.exclusion, beads=model.beads,
-                       thickness=model.thickness, settings_hash=settings_hash):
+    if st is None:
         return step
-    st = store.states(knot, model.exclusion, model.beads, model.thickness, settings_hash,
-                      structure=False)
     have = hits(st.get("ground"))
     if untried_starts(st) or have < MIN_REPLICAS:
         return step
@@ -424,10 +426,12 @@ def run_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget, sto
     def extend(g: dict) -> list[SweepJob]:
         """The replicas to add to a (knot, model) whose replicas have all ended."""
         top = most[g["model"].exclusion]
-        while g["replicas"] < top and not ensemble_converged(
-                store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion]):
-            n = min(top, g["replicas"] + searches_lacking(
-                store, g["knot"], g["model"], res.settings_hash[g["model"].exclusion], step))
+        while g["replicas"] < top:
+            st = _stored_states(store, g["knot"], g["model"],
+                                res.settings_hash[g["model"].exclusion])
+            if st is not None and converged_with_every_start(st):
+                break
+            n = min(top, g["replicas"] + searches_lacking(st, g["model"], step))
             more = plan_sweep([g["knot"]], [g["model"]], replace(budget, replicas=n),
                               seed, problem)[g["replicas"]:]
             more = [replace(j, start=favoured_start(store, j, g["replicas"])) for j in more]
