@@ -17,8 +17,11 @@ Public API
     The questions ``stiffknots db`` answers, as plain data.
 :func:`row_from_replica`
     The row of an engine replica result.
+:func:`take_census`, :func:`save_census`, :func:`stored_census`
+    The distinct states of a knot at one width (:mod:`stiffknots.store.census`).
 """
 
+from stiffknots.store.census import save_census, stored_census, take_census
 from stiffknots.store.errors import KeyCollisionError, SchemaVersionError, StoreError
 from stiffknots.store.keys import (
     KEY_FIELDS,
@@ -36,5 +39,5 @@ from stiffknots.store.sqlite import DEFAULT_PATH, Store
 __all__ = ["Store", "DEFAULT_PATH", "ReplicaKey", "KEY_FIELDS", "settings_hash",
            "canonical_json", "thickness_key", "knot_sort_key", "SCHEMA_VERSION", "REQUIRED",
            "OPTIONAL", "SEEDED_START", "row_from_replica", "search_of", "describe_knot",
-           "ground_table", "to_csv",
+           "ground_table", "to_csv", "take_census", "save_census", "stored_census",
            "StoreError", "SchemaVersionError", "KeyCollisionError"]

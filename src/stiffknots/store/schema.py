@@ -1,4 +1,4 @@
-"""Schema of the results database (SQLite), version 2.
+"""Schema of the results database (SQLite), version 3.
 
 One file (default ``results/stiffknots.db``; ``--db PATH``), journal mode WAL (readers never
 block the writer, a killed writer never leaves a half-written row), one row per annealed
@@ -99,26 +99,67 @@ params                 TEXT      the audit's parameters (JSON: sample, seed, dep
                                  replicas, models, tolerance)
 =====================  ========  ==========================================================
 
+Table ``census`` (version 3)
+----------------------------
+One row per state of a stored census (:mod:`stiffknots.store.census`): the distinct states that
+every stored search of a knot at one width (one model, N and thickness; all settings pooled)
+found within a window of the lowest ε (:func:`stiffknots.analysis.census`). Key:
+``UNIQUE(census, knot, exclusion, beads, thickness_key, state)``; a census of a knot at a width
+computed again with the same parameters replaces all its rows.
+
+=====================  ========  ==========================================================
+column                 type      meaning
+=====================  ========  ==========================================================
+id                     INTEGER   row id
+census                 TEXT      16 hex digits: the hash of the census's parameters
+created                TEXT      UTC time the row was written (ISO 8601)
+version                TEXT      stiffknots version that computed it
+knot, exclusion,       …         the knot and width (as in ``replicas``)
+beads, thickness_key
+w_over_L               REAL      its w/L
+settings               TEXT      JSON list of the settings hashes of the pooled runs
+state                  INTEGER   0, 1, ...: the state's rank by increasing ε (0 = lowest)
+name                   TEXT      ``CB(i=2)``, ``4C``, ``80``, ``other``
+shape                  TEXT      shape class; ``multiplicity`` INTEGER its braid index (CB)
+multiplicity           INTEGER
+structure              TEXT      the representative's structure in the words of §V B (NULL:
+                                 not read)
+epsilon                REAL      the state's lowest ε
+eps_max                REAL      its highest ε
+count                  INTEGER   replicas (rows) in the state
+searches               INTEGER   independent searches that ended in it
+representative         INTEGER   ``replicas.id`` of its lowest chain
+spread                 REAL      largest shape distance / L of a member from it
+replicas               INTEGER   rows pooled when the census was taken
+params                 TEXT      the census's parameters (JSON: window, rel_tol,
+                                 max_distance, points)
+=====================  ========  ==========================================================
+
 Table ``meta``: ``key``/``value`` text pairs (``schema_version``, ``created``,
 ``created_by``, and ``migrated`` once a database was migrated).
 
 Migrations: a database of an older version opened for writing is migrated in one transaction
-(:data:`MIGRATIONS`: version 1 → 2 adds ``audits``); opened read-only it is read as it is
-(:data:`READABLE`: a version-1 database has no audits).
+(:data:`MIGRATIONS`: version 1 → 2 adds ``audits``, 2 → 3 ``census``); opened read-only it
+is read as it is (:data:`READABLE`: a version-1 database has no audits, a version-2 one no
+census).
 """
 
 from __future__ import annotations
 
 __all__ = ["SCHEMA_VERSION", "READABLE", "MIGRATIONS", "APPLICATION_ID", "DDL", "COLUMNS",
-           "ROW_COLUMNS", "ENSEMBLE_FIELDS", "AUDIT_COLUMNS"]
+           "ROW_COLUMNS", "ENSEMBLE_FIELDS", "AUDIT_COLUMNS", "CENSUS_COLUMNS",
+           "WIDTH_FIELDS"]
 
 #: Version of the schema this code writes and reads.
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: The versions a read-only store reads as they are (no migration: it writes nothing).
-READABLE = (1, 2)
+READABLE = (1, 2, 3)
 
 #: ``PRAGMA application_id`` of a stiffknots results database (the bytes ``"SKNT"``).
 APPLICATION_ID = int.from_bytes(b"SKNT", "big")
+
+#: Fields that define a width of a knot: the runs a census pools.
+WIDTH_FIELDS = ("knot", "exclusion", "beads", "thickness_key")
 
 #: Fields that define an ensemble: replicas grouped into states together.
 ENSEMBLE_FIELDS = ("knot", "exclusion", "beads", "thickness_key", "settings_hash")
@@ -199,8 +240,42 @@ AUDIT_COLUMNS = ("id", "audit", "created", "version", "knot", "exclusion", "bead
                  "audit_settings_hash", "audit_seed", "searches", "audit_epsilon",
                  "audit_state", "false_verdict", "params")
 
+_CENSUS = """
+CREATE TABLE IF NOT EXISTS census (
+    id                   INTEGER PRIMARY KEY,
+    census               TEXT    NOT NULL CHECK (length(census) = 16),
+    created              TEXT    NOT NULL,
+    version              TEXT    NOT NULL,
+    knot                 TEXT    NOT NULL,
+    exclusion            TEXT    NOT NULL CHECK (exclusion IN ('bead', 'tube')),
+    beads                INTEGER NOT NULL,
+    thickness_key        TEXT    NOT NULL,
+    w_over_L             REAL    NOT NULL,
+    settings             TEXT    NOT NULL,
+    state                INTEGER NOT NULL CHECK (state >= 0),
+    name                 TEXT    NOT NULL,
+    shape                TEXT    NOT NULL CHECK (shape IN ('CB', '4C', '80', 'other')),
+    multiplicity         INTEGER,
+    structure            TEXT,
+    epsilon              REAL    NOT NULL,
+    eps_max              REAL    NOT NULL,
+    count                INTEGER NOT NULL CHECK (count >= 1),
+    searches             INTEGER NOT NULL CHECK (searches >= 1),
+    representative       INTEGER NOT NULL,
+    spread               REAL    NOT NULL CHECK (spread >= 0),
+    replicas             INTEGER NOT NULL CHECK (replicas >= 1),
+    params               TEXT    NOT NULL,
+    UNIQUE (census, knot, exclusion, beads, thickness_key, state)
+)"""
+
+#: Every column of ``census``, in table order.
+CENSUS_COLUMNS = ("id", "census", "created", "version", "knot", "exclusion", "beads",
+                  "thickness_key", "w_over_L", "settings", "state", "name", "shape",
+                  "multiplicity", "structure", "epsilon", "eps_max", "count", "searches",
+                  "representative", "spread", "replicas", "params")
+
 #: version → the statements that migrate a database of that version to the next one.
-MIGRATIONS: dict[int, tuple[str, ...]] = {1: (_AUDITS,)}
+MIGRATIONS: dict[int, tuple[str, ...]] = {1: (_AUDITS,), 2: (_CENSUS,)}
 
 #: The statements that create an empty database (run in one transaction, idempotent).
 DDL: tuple[str, ...] = (
@@ -211,6 +286,7 @@ DDL: tuple[str, ...] = (
     "CREATE INDEX IF NOT EXISTS replicas_settings ON replicas (settings_hash)",
     _ENSEMBLES,
     _AUDITS,
+    _CENSUS,
 )
 
 #: Every column of ``replicas``, in table order.

@@ -62,6 +62,7 @@ from stiffknots.store.rows import blob_coords, decode_row, normalise_row, search
 from stiffknots.store.schema import (
     APPLICATION_ID,
     AUDIT_COLUMNS,
+    CENSUS_COLUMNS,
     COLUMNS,
     DDL,
     ENSEMBLE_FIELDS,
@@ -69,6 +70,7 @@ from stiffknots.store.schema import (
     READABLE,
     ROW_COLUMNS,
     SCHEMA_VERSION,
+    WIDTH_FIELDS,
 )
 
 __all__ = ["Store", "DEFAULT_PATH"]
@@ -928,6 +930,66 @@ class Store:
             out.append(d)
         out.sort(key=lambda d: d["created"], reverse=True)
         out.sort(key=lambda d: knot_sort_key(d["knot"]))
+        return out
+
+
+    # ---- census ----------------------------------------------------------------------------
+
+    def put_census(self, rows: Iterable[Mapping[str, Any]]) -> int:
+        """Write the rows of one or more censuses (the columns of
+        :data:`~stiffknots.store.schema.CENSUS_COLUMNS` but ``id``; :mod:`stiffknots.store.census`)
+        in one transaction. The rows stored under each (census, knot and width) written are
+        deleted first: a census computed again replaces the old one whole. Returns the rows
+        written."""
+        cols = CENSUS_COLUMNS[1:]
+        rows = [dict(r) for r in rows]
+        for r in rows:
+            missing = [c for c in cols if c not in r]
+            if missing:
+                raise ValueError(f"a census row lacks {', '.join(missing)}")
+            if not isinstance(r["params"], str):
+                r["params"] = canonical_json(r["params"])
+            if not isinstance(r["settings"], str):
+                r["settings"] = json.dumps(sorted(r["settings"]))
+        if self._version < 3:
+            raise StoreError(f"{self._path} is a schema-version-{self._version} database "
+                             "opened read-only: it has no census table (open it for writing "
+                             "to migrate it)")
+        keys = {tuple(r[c] for c in ("census", *WIDTH_FIELDS)) for r in rows}
+        where = " AND ".join(f"{c} = ?" for c in ("census", *WIDTH_FIELDS))
+        sql = (f"INSERT INTO census ({', '.join(cols)}) "
+               f"VALUES ({', '.join(':' + c for c in cols)})")
+        with self._write() as con:
+            for k in keys:
+                con.execute(f"DELETE FROM census WHERE {where}", k)
+            con.executemany(sql, [{c: r[c] for c in cols} for r in rows])
+        return len(rows)
+
+    def census_rows(self, knot: str | list[str] | None = None,
+                    exclusion: str | None = None) -> list[dict[str, Any]]:
+        """Stored census rows (``params`` and ``settings`` decoded), in knot-table order, then
+        width, newest census first, then state; none in a database of schema version < 3 read
+        as it is."""
+        if self._version < 3:
+            return []
+        clauses, params = [], []
+        for col, value in (("knot", knot), ("exclusion", exclusion)):
+            if value is None:
+                continue
+            values = list(value) if isinstance(value, list | tuple) else [value]
+            clauses.append(f"{col} IN ({', '.join('?' * len(values))})")
+            params.extend(values)
+        where = (" WHERE " + " AND ".join(clauses)) if clauses else ""
+        out = []
+        for r in self._query(f"SELECT {', '.join(CENSUS_COLUMNS)} FROM census{where}", params):
+            d = dict(zip(CENSUS_COLUMNS, r, strict=True))
+            d["params"] = json.loads(d["params"])
+            d["settings"] = json.loads(d["settings"])
+            out.append(d)
+        out.sort(key=lambda d: d["state"])
+        out.sort(key=lambda d: d["created"], reverse=True)
+        out.sort(key=lambda d: (knot_sort_key(d["knot"]), d["exclusion"], d["beads"],
+                                float(d["thickness_key"])))
         return out
 
 
