@@ -3,7 +3,9 @@
 ``stiffknots db [--db PATH] states K [--model bead] [--json]`` — a knot's ground and
 metastable states, per ensemble (model, width, N, settings);
 ``stiffknots db [--db PATH] grounds [--csv FILE] [--json]`` — every ground state, one row per
-knot × model × N × width.
+knot × model × N × width;
+``stiffknots db [--db PATH] census K [--json]`` — a knot's stored census (its distinct states at
+each width; ``stiffknots census`` takes it).
 
 An ensemble is converged by the sweeps' rule (:func:`stiffknots.sweeps.ensemble_converged`).
 """
@@ -100,6 +102,36 @@ def states(
             for role, v in named:
                 out.print(f"  {role:<13} {v or '—'}", highlight=False, markup=False)
     out.print(f"converged: {CONVERGENCE_RULE}", highlight=False, markup=False)
+
+
+@db_app.command("census")
+def census(
+    ctx: typer.Context,
+    knot: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
+    json_: JsonOpt = False,
+) -> None:
+    """A knot's stored census: its distinct states within the window of the lowest ε, at each
+    stored width, with the replicas and searches that ended in each (stiffknots census takes
+    it)."""
+    from stiffknots.cli.census import census_table
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.store import stored_census
+
+    name = get_knot(knot).name
+    with _open(ctx) as store:
+        got = stored_census(store, name)
+    if json_:
+        dump({"knot": name, "census": got})
+        return
+    if not got:
+        out.print(f"no census of {name} is stored in {ctx.obj['db']}: take it with "
+                  f"stiffknots census {name} --db {ctx.obj['db']}", highlight=False,
+                  markup=False)
+        return
+    for c in got:
+        out.print(census_table(c))
+        out.print(f"taken {c['created']} by stiffknots {c['version']} from {c['replicas']} "
+                  f"replicas", highlight=False, markup=False)
 
 
 @db_app.command("grounds")

@@ -16,6 +16,7 @@ from stiffknots.cli import (
     atlas,
     audit,
     catalogue,
+    census,
     curves,
     db,
     open,
@@ -57,6 +58,7 @@ for _name, _command in (
         ("paper", studies.paper),
         ("atlas", atlas.atlas),
         ("audit", audit.audit),
+        ("census", census.census),
         ("bench", studies.bench),
         ("warmup", studies.warmup),
         ("version", catalogue.version)):
