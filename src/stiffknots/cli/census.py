@@ -31,14 +31,24 @@ def census_table(c: dict) -> Table:
               caption=("one state: same class, ε within "
                        f"{100 * c['params']['rel_tol']:g} %, shape distance ≤ "
                        f"{c['params']['max_distance']:g} L (spread: the largest)"))
-    for col in ("#", "state", "ε", "above lowest", "replicas", "searches", "spread / L",
-                "structure (§V B)"):
-        t.add_column(col, justify="left" if col in ("state", "structure (§V B)") else "right")
+    for col in ("#", "state", "ε", "above lowest", "replicas", "searches", "spread / L"):
+        t.add_column(col, justify="left" if col == "state" else "right")
     for s in c["states"]:
         t.add_row(str(s["state"]), escape(s["name"]), f"{s['epsilon']:.3f}",
                   f"{100 * (s['epsilon'] - low) / abs(low):.2f} %", str(s["count"]),
-                  str(s["searches"]), f"{s['spread']:.4f}", escape(s["structure"] or "—"))
+                  str(s["searches"]), f"{s['spread']:.4f}")
     return t
+
+
+def print_census(c: dict) -> None:
+    """The table, then each state's structure (§V B) on a line of its own."""
+    out.print(census_table(c))
+    if any(s.get("structure") for s in c["states"]):
+        out.print("structure of each state's lowest chain (§V B):", highlight=False,
+                  markup=False)
+        for s in c["states"]:
+            out.print(f"  {s['state']:>2} {s['name']:<8} {s.get('structure') or '—'}",
+                      highlight=False, markup=False)
 
 
 def census(
@@ -103,7 +113,7 @@ def census(
                 save_census(store, c)
                 results.append(c)
                 if not json_:
-                    out.print(census_table(c))
+                    print_census(c)
     if json_:
         dump({"db": str(path), "model": model, "census": results})
     elif not results:

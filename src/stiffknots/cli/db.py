@@ -113,7 +113,7 @@ def census(
     """A knot's stored census: its distinct states within the window of the lowest ε, at each
     stored width, with the replicas and searches that ended in each (stiffknots census takes
     it)."""
-    from stiffknots.cli.census import census_table
+    from stiffknots.cli.census import print_census
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.store import stored_census
 
@@ -129,7 +129,7 @@ def census(
                   markup=False)
         return
     for c in got:
-        out.print(census_table(c))
+        print_census(c)
         out.print(f"taken {c['created']} by stiffknots {c['version']} from {c['replicas']} "
                   f"replicas", highlight=False, markup=False)
 

@@ -154,6 +154,50 @@ def _spread(res, rel_tol: float = 1e-3) -> float:
     return max(same) - min(same) if len(same) > 1 else 0.0
 
 
+def doubled(coords: Any) -> np.ndarray:
+    """A closed chain with every bond cut at its midpoint and scaled by 2: the same curve at
+    2 N unit bonds, so the same tube (a resampling to another N need not keep it: a polished
+    chain touches its tube)."""
+    x = np.asarray(coords, dtype=float)
+    x2 = np.empty((2 * len(x), 3))
+    x2[0::2] = 2 * x
+    x2[1::2] = x + np.roll(x, -1, axis=0)
+    return x2
+
+
+def k_from(e1: float, e2: float, n1: int, n2: int) -> float:
+    """The polygon coefficient ``k`` of ``eps_N = eps (1 - k/N^2)`` from the energies of one
+    state at two bead counts: ``k = (e2 - e1) / (e2 (1/N1^2 - 1/N2^2))``."""
+    return (e2 - e1) / (e2 * (1 / n1**2 - 1 / n2**2))
+
+
+def correct_and_fit(points: list[dict], n: int, disc: dict) -> tuple[dict | None,
+                                                                     float | None,
+                                                                     float | None]:
+    """Correct every point for the discretisation and extrapolate the points marked
+    ``in_fit`` to ``w -> 0``.
+
+    Each point (``epsilon_raw``, ``spread``, ``w_over_L``, ``in_fit``) gains ``epsilon`` =
+    ``epsilon_raw (1 + k/N^2)`` and ``sigma`` = its spread ⊕ :data:`POINT_FLOOR`; ``disc``
+    (``k``, ``k_error``) gains ``error``, the systematic error of the common correction at the
+    thinnest fitted point. Returns ``(fit, eps_thin, error)`` — None each with fewer than two
+    points in the fit; the error is the fit's ⊕ the correction's (one standard error).
+    """
+    k_used, k_err = disc["k"], disc["k_error"]
+    for p in points:
+        e = p["epsilon_raw"]
+        p["epsilon"] = e * (1 + k_used / n**2)
+        p["sigma"] = math.hypot(p["spread"], POINT_FLOOR * e)
+    fit_pts = [p for p in points if p["in_fit"]]
+    thin = fit_pts[-1] if fit_pts else points[-1]
+    disc["error"] = thin["epsilon_raw"] * k_err / n**2
+    if len(fit_pts) < 2:
+        return None, None, None
+    f = extrapolate([p["w_over_L"] for p in fit_pts], [p["epsilon"] for p in fit_pts],
+                    [p["sigma"] for p in fit_pts])
+    return f.as_dict(), f.epsilon, math.hypot(f.error, disc["error"])
+
+
 def thin_limit(knot, budget: str = "small", seed: int = 0, *,
                widths: Sequence[float] | None = None, beads: int | None = None,
                runner: Callable[[Any, str], Any] | None = None,
@@ -276,10 +320,7 @@ def thin_limit(knot, budget: str = "small", seed: int = 0, *,
     n2 = 2 * n
     r2 = None
     if b.measure_k and thin["w_over_L"] * n2 < 1 and n2 <= V.MAX_BEADS:
-        x = np.asarray(chains[f"{thin['w_over_L']:g}"], dtype=float)
-        x2 = np.empty((2 * len(x), 3))
-        x2[0::2] = 2 * x
-        x2[1::2] = x + np.roll(x, -1, axis=0)
+        x2 = doubled(chains[f"{thin['w_over_L']:g}"])
         try:
             r2 = relax_at(x2, thin["w_over_L"] * (1 - 1e-9), n2,
                           f"relax at N = {n2} (discretisation)")
@@ -290,8 +331,7 @@ def thin_limit(knot, budget: str = "small", seed: int = 0, *,
         if r2.interrupted:
             raise KeyboardInterrupt
         e1, e2 = thin["epsilon_raw"], r2.best.epsilon
-        # eps_N = eps - eps k / N^2  =>  k = (e2 - e1) / (eps (1/N1^2 - 1/N2^2))
-        k_meas = (e2 - e1) / (e2 * (1 / n**2 - 1 / n2**2))
+        k_meas = k_from(e1, e2, n, n2)
         disc.update(k_measured=k_meas, check_beads=n2, check_epsilon=e2,
                     check_shape=_shape(r2)[0])
         if _shape(r2)[0] == thin["shape"] and k_meas > 0:
@@ -301,23 +341,8 @@ def thin_limit(knot, budget: str = "small", seed: int = 0, *,
             f"ε_{n2} = {e2:.5f}: k = {k_meas:.3f} (polygon rule ε/6 = {k_rule:.3f})")
     disc.update(k=k_used, k_error=k_err)
     for p in points:
-        e = p["epsilon_raw"]
-        p["epsilon"] = e * (1 + k_used / n**2)
-        p["sigma"] = math.hypot(p["spread"], POINT_FLOOR * e)
-    # the systematic error of the common correction, at the thinnest point's energy
-    disc["error"] = thin["epsilon_raw"] * k_err / n**2
-
-    fit_pts = [p for p in points if p["shape"] == thin["shape"]]
-    for p in points:
         p["in_fit"] = p["shape"] == thin["shape"]
-    fit = None
-    eps_thin = err = None
-    if len(fit_pts) >= 2:
-        f = extrapolate([p["w_over_L"] for p in fit_pts], [p["epsilon"] for p in fit_pts],
-                        [p["sigma"] for p in fit_pts])
-        fit = f.as_dict()
-        eps_thin = f.epsilon
-        err = math.hypot(f.error, disc["error"])
+    fit, eps_thin, err = correct_and_fit(points, n, disc)
     struct = structure_value(thin["label"], thin["multiplicity"])
     if struct is not None and eps_thin is not None:
         struct["difference"] = eps_thin - struct["epsilon"]
