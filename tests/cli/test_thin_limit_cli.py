@@ -38,6 +38,7 @@ def one_line(err: str) -> str:
     (("thin-limit", "3_1", "--budget", "huge"), "--budget must be one of small, default"),
     (("thin-limit", "3_9"), "unknown knot"),
     (("thin-limit", "3_1", "--seed", "-1"), "--seed must be"),
+    (("thin-limit", "3_1", "--states", "0"), "--states must be"),
 ])
 def test_bad_input_one_line_exit_2(args, words):
     rc, out, err = run(*args, "--json", timeout=120)
@@ -60,37 +61,48 @@ def test_anneal_w_over_l_sets_the_tube_and_the_n_rule():
 
 @pytest.mark.slow
 def test_thin_limit_trefoil_small(tmp_path):
-    """The trefoil's thin limit within 0.05 % of 8π² and within 3 of its own error bars;
-    ε*_w decreasing as w/L decreases."""
+    """The trefoil's one state, CB(2), followed to w → 0: within 0.05 % of 8π² and within 3 of
+    its own error bars, ε decreasing as w/L decreases; the routes agree."""
     rc, out, err = run("thin-limit", "3_1", "--budget", "small", "--out", tmp_path / "o",
                        "--json", timeout=1800)
     assert rc == 0, err
     d = json.loads(out)
-    assert d["knot"] == "3_1" and d["shape"] == "CB2"
+    assert d["knot"] == "3_1" and d["shape"] == "CB(i=2)" and d["ground"] == 0
     assert abs(d["epsilon_thin"] - EPS_CB2) < 5e-4 * EPS_CB2
     assert abs(d["epsilon_thin"] - EPS_CB2) < 3 * d["error"]
-    eps = [p["epsilon"] for p in d["points"]]
-    wl = [p["w_over_L"] for p in d["points"]]
-    assert wl == sorted(wl, reverse=True)
+    g = d["states"][d["ground"]]
+    assert g["epsilon_thin"] == d["epsilon_thin"] and g["event"] is None
+    eps = [p["epsilon"] for p in g["points"]]
+    wl = [p["w_over_L"] for p in g["points"]]
+    assert wl == sorted(wl, reverse=True) == [0.004, 0.002, 0.001, 0.0005]
     assert all(a > b for a, b in zip(eps, eps[1:], strict=False))
-    assert d["series_decreasing"]
-    assert d["structure"]["name"] == "CB(2)"
-    assert d["structure"]["epsilon"] == pytest.approx(EPS_CB2, rel=1e-9)
-    for p in d["points"]:
-        assert {"w_over_L", "beads", "epsilon", "shape", "converged"} <= set(p)
-    assert {"model", "p"} <= set(d["fit"])
-    assert d["version"] and d["seed"] == 0 and d["parameters"]["beads"] >= 8
-    assert (tmp_path / "o" / "thin_limit.png").stat().st_size > 1000
+    assert g["structure_name"] == "CB(2)" and g["agree"] is True
+    assert g["structure_epsilon"] == pytest.approx(EPS_CB2, rel=1e-9)
+    for p in g["points"]:
+        assert {"w_over_L", "beads", "epsilon", "shape", "structure", "step"} <= set(p)
+    assert d["census"]["width"]["w_over_L"] == pytest.approx(0.0047140452)
+    assert d["version"] and d["seed"] == 0
+    assert (tmp_path / "o" / "branches.png").stat().st_size > 1000
     assert (tmp_path / "o" / "manifest.json").exists()
+    assert (tmp_path / "o" / "state_0_w_over_L_0.0005.xyz").exists()
 
 
 @pytest.mark.slow
-def test_thin_limit_figure_eight_points_say_how_their_shape_was_read():
-    """4_1's cage reads 'other' at d = w in the thinnest tubes and 4C at d = 0.5: a point's
-    shape and the words of its verdict must not disagree silently."""
-    rc, out, err = run("thin-limit", "4_1", "--json", timeout=1800)
+def test_thin_limit_figure_eight_names_its_thin_limit_ground_state():
+    """4_1 has two states at the atlas width (`other` 128.57, the cage 129.31); the cage's own
+    limit agrees with the structure route ε*_4C; the run names the lowest limit, its margin
+    and where the branches cross."""
+    rc, out, err = run("thin-limit", "4_1", "--budget", "small", "--json", timeout=1800)
     assert rc == 0, err
-    for p in json.loads(out)["points"]:
-        assert p["run_shape"] in p["convergence"]
-        if p["run_shape"] != p["shape"]:
-            assert f"read at d = 0.5 it is {p['shape']}" in p["convergence"]
+    d = json.loads(out)
+    names = [s["shape"] for s in d["states"]]
+    assert "4C" in names and len(names) >= 2
+    cage = d["states"][names.index("4C")]
+    assert cage["structure_name"] == "4C" and cage["agree"] is True
+    assert abs(cage["epsilon_thin"] - 126.47247) < max(3 * cage["error"], 0.005 * 126.5)
+    g = d["states"][d["ground"]]
+    assert d["epsilon_thin"] == g["epsilon_thin"] == min(
+        s["epsilon_thin"] for s in d["states"] if s["epsilon_thin"] is not None)
+    assert d["margin"]["gap"] > 0 and d["margin"]["next"] != d["ground"]
+    if d["ground"] != 0:
+        assert d["crossing"] is not None

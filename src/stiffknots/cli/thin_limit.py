@@ -1,5 +1,6 @@
-"""``stiffknots thin-limit``: ε*_w over a series of w/L, extrapolated to w → 0 (§V A), next to
-the structure route at w = 0 (§V B)."""
+"""``stiffknots thin-limit``: every state of a knot followed to w → 0 and the thin-limit ground
+state (§V A), next to the structure route at w = 0 (§V B)
+(:mod:`stiffknots.studies.thin_states`)."""
 
 from __future__ import annotations
 
@@ -31,25 +32,33 @@ from stiffknots.cli.app import (
 def thin_limit(
     name: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
     budget: Annotated[str, typer.Option(
-        help="small (a few minutes: the widest width annealed, the others by continuation) "
-             "or default (up to ~15 min per knot on 2 cores: every width also annealed "
-             "afresh, the discretisation coefficient measured).")] = "small",
+        help="default (9 widths w/L = 0.004 … 0.00025, the discretisation measured on every "
+             "branch: minutes per state on 2 cores) or small (4 widths 0.004 … 0.0005, the "
+             "polygon rule for the discretisation: about a minute per state).")
+    ] = "default",
+    states: Annotated[int | None, typer.Option(
+        help="Follow only the lowest N states of the census (default: every state within "
+             "15 % of the lowest).")] = None,
     seed: SeedOpt = 0,
     out_dir: OutOpt = None,
     overwrite: OverwriteOpt = False,
     json_: JsonOpt = False,
 ) -> None:
-    """ε*_w of a knot in the tube model over a series of w/L (e.g. 0.004 … 0.0005), each point
-    annealed or continued from the previous width and polished, corrected for the
-    discretisation and extrapolated to w/L → 0 with an error bar; compared with the
-    structure route (CB(i) = 2π²i², the 80, the 4-fold cage) at w = 0."""
+    """The thin-limit ground state of a knot (§V A): its states at the atlas width (tube model,
+    w/L = 0.0047, three independent searches) sorted into a census, every state followed down
+    to w/L = 0.00025 by continuation and extrapolated to its own ε* at w/L → 0 with an error
+    bar, the structure route's w = 0 value beside each state whose class has one (CB(i), the
+    80, the 4-fold cage). Says which state is the ground in the thin limit, by how much and
+    how sure, and where the branches cross. See docs/thin-limit.md."""
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
-    from stiffknots.studies.thin_limit import BUDGET_NAMES, plot, thin_limit
+    from stiffknots.studies.thin_states import BUDGETS, thin_limit_states
 
-    choice("--budget", budget, BUDGET_NAMES)
+    choice("--budget", budget, tuple(BUDGETS))
     V.seed(seed)
+    if states is not None:
+        V.integer("states", states, 1, 1000)
     knot = get_knot(name)  # resolved once; a wrong name: one line before any work
     out_path = prepare_out(out_dir, overwrite)
 
@@ -65,21 +74,21 @@ def thin_limit(
 
     try:
         with _stdout_to_stderr(json_):
-            res = thin_limit(knot, budget, seed, runner=runner, say=say)
+            res = thin_limit_states(knot, budget, seed, states=states, runner=runner, say=say)
     except KeyboardInterrupt:
         from stiffknots.cli.app import Interrupted
 
-        raise Interrupted("interrupted: the thin-limit series is incomplete; nothing to "
+        raise Interrupted("interrupted: the states are not all followed to w = 0; nothing to "
                           "report") from None
-    chains = res.pop("chains")
+    chains = [st.pop("chains") for st in res["states"]]
     if out_path is not None:
-        res["files"] = _write(out_path, res, chains, plot)
+        res["files"] = _write(out_path, res, chains)
     if json_:
         dump(res)
         return
     _table(res)
     if out_path is not None:
-        out.print(f"results in {out_path}/ (result.json, thin_limit.png, chains)",
+        out.print(f"results in {out_path}/ (result.json, branches.png, each state's chains)",
                   markup=False, highlight=False)
 
 
@@ -103,57 +112,80 @@ def _stdout_to_stderr(active: bool):
         os.close(saved)
 
 
-def _write(path, res, chains, plot) -> dict:
+def _write(path, res, chains) -> dict:
     from stiffknots.chain import Chain
     from stiffknots.fileio import write_json
     from stiffknots.formats import save
+    from stiffknots.report.figures import plot_branches, save_figure
 
-    files = {}
+    files: dict = {}
     with ResultsFolder(path, "thin-limit"):
-        for wl, x in chains.items():
-            p = path / f"chain_w_over_L_{wl}.xyz"
-            save(Chain(x, closed=True), p)
-            files[wl] = str(p)
-        files["png"] = str(plot(res, path / "thin_limit.png"))
+        for i, (st, xs) in enumerate(zip(res["states"], chains, strict=True)):
+            for p, x in zip(st["points"], xs, strict=True):
+                f = path / f"state_{i}_w_over_L_{p['w_over_L']:g}.xyz"
+                save(Chain(x, closed=True), f)
+                files[f"state {i} w/L {p['w_over_L']:g}"] = str(f)
+        files["png"] = str(save_figure(plot_branches(res), path / "branches.png"))
         files["result"] = str(write_json(path / "result.json", res | {"files": dict(files)}))
     return files
 
 
+def _num(x, fmt=".4f") -> str:
+    return "—" if x is None else format(x, fmt)
+
+
 def _table(res) -> None:
-    t = Table(title=escape(f"{res['knot']}: ε*_w in the tube model ({res['budget']} budget, "
-                           f"seed {res['seed']})"))
-    for col in ("w/L", "N", "ε_N", "ε corr.", "σ", "shape", "route", "conv.", "fit"):
-        t.add_column(col, justify="right", no_wrap=True)
-    for p in res["points"]:
-        t.add_row(f"{p['w_over_L']:g}", str(p["beads"]), f"{p['epsilon_raw']:.4f}",
-                  f"{p['epsilon']:.4f}", f"{p['sigma']:.1g}", str(p["shape"]),
-                  {"anneal": "anneal", "continuation": "cont."}[p["route"]],
-                  "yes" if p["converged"] else "NO", "yes" if p["in_fit"] else "no")
+    c = res["census"]
+    t = Table(title=escape(f"{res['knot']}: every state followed to w → 0 (tube model; census "
+                           f"at {c['width']['text']}, {res['budget']} budget, seed "
+                           f"{res['seed']})"),
+              caption="ε*_s: the state's own limit w/L → 0, ± one standard error")
+    for col in ("#", "state", "ε at w/L 0.0047", "ε*_s", "±", "structure route", "agree",
+                "event"):
+        t.add_column(col, justify="left" if col in ("state", "event") else "right")
+    for i, st in enumerate(res["states"]):
+        ev = st["event"]
+        t.add_row(str(i) + (" *" if i == res["ground"] else ""), escape(st["shape"]),
+                  f"{st['epsilon']:.3f}", _num(st["epsilon_thin"]), _num(st["error"], ".2g"),
+                  (f"{st['structure_epsilon']:.4f}"
+                   if st["structure_epsilon"] is not None else "—"),
+                  {True: "yes", False: "NO", None: "—"}[st["agree"]],
+                  escape("—" if ev is None else f"{ev['kind']} at w/L {ev['w_over_L']:g}: "
+                                                 f"{ev['detail']}"))
     out.print(t)
-    d = res["discretisation"]
-    out.print(f"discretisation: ε = ε_N (1 + k/N²), k = {d['k']:.3f} ± {d['k_error']:.3f}"
-              + (f" (measured at N = {d['check_beads']})" if "k_measured" in d else
-                 " (polygon rule ε/6)") + f": ± {d['error']:.2g} on ε*",
+    n = res["states"][0]["points"][0]["beads"] if res["states"] else None
+    out.print(f"ladder: w/L {', '.join(f'{w:g}' for w in res['parameters']['widths'])} at "
+              f"N = {n}; census: {c['replicas']} replicas, "
+              f"{'converged' if c['converged'] else 'NOT converged'} ({c['convergence']})",
               markup=False, highlight=False)
-    f = res["fit"]
-    if f is None or res["epsilon_thin"] is None:
-        out.print("fewer than two points of the thinnest shape: no extrapolation",
-                  markup=False, highlight=False)
+    for i, st in enumerate(res["states"]):
+        r = st["structure_route"]
+        out.print(f"  state {i}: structure at the atlas width (§V B) {st['structure'] or '—'}; "
+                  f"route at w = 0: " + (r["method"] if r["method"] else "none")
+                  + (f" — {r['note']}" if r["note"] else ""), markup=False, highlight=False)
+    g = res["ground"]
+    if g is None:
+        out.print("no state has two points in its branch: no thin limit", markup=False,
+                  highlight=False)
         return
-    pr = f" (1σ range {f['p_range'][0]:.2f}–{f['p_range'][1]:.2f})" if f["p_range"] else ""
-    out.print(f"fit ε(w) = ε* + a (w/L)^p: p = {f['p']:.2f}{pr}, a = {f['a']:.4g}, "
-              f"χ²/dof = {f['chi2']:.3g}/{f['dof']}", markup=False, highlight=False)
-    out.print(f"thin limit w/L → 0 ({res['shape']}): ε* = {res['epsilon_thin']:.4f} ± "
-              f"{res['error']:.2g} (fit: statistical {f['stat_error']:.2g}, exponent "
-              f"{f['exponent_error']:.2g}, fit range {f['range_error']:.2g}; discretisation "
-              f"{d['error']:.2g})", markup=False, highlight=False)
-    s = res["structure"]
-    if s is not None:
-        out.print(f"structure route at w = 0: {s['name']} = {s['epsilon']:.6f}; difference "
-                  f"{s['difference']:+.4f} ({s['in_error_bars']:.1f} error bars)",
-                  markup=False, highlight=False)
-    if not res["series_decreasing"]:
-        out.print("note: ε does not decrease along the series as w/L decreases",
+    st = res["states"][g]
+    line = (f"thin-limit ground state: {g} ({st['shape']}), ε* = {st['epsilon_thin']:.4f} ± "
+            f"{st['error']:.2g}")
+    m = res["margin"]
+    if m is not None:
+        sure = (f"{m['sigmas']:.1f} combined errors" if m["sigmas"] is not None else "—")
+        line += (f", below state {m['next']} ({res['states'][m['next']]['shape']}) by "
+                 f"{m['gap']:.4f} ({sure}"
+                 + ("; too close to call" if m["sigmas"] is not None and m["sigmas"] < 2
+                    else "") + ")")
+    out.print(line, markup=False, highlight=False)
+    if g != 0:
+        where = (f"; the branches cross above w/L = {res['crossing']:g}"
+                 if res["crossing"] is not None else "")
+        out.print(f"the thin-limit ground is not the ground at the atlas width (state 0, "
+                  f"{res['states'][0]['shape']}){where}", markup=False, highlight=False)
+    elif len(res["states"]) > 1:
+        out.print("the same state is the ground at the atlas width and in the thin limit",
                   markup=False, highlight=False)
 
 

@@ -578,3 +578,45 @@ def plot_thin_limit(result: Mapping, ax=None):
     ax.set_title(f"{result.get('knot', '')}: thin limit (tube model)")
     ax.legend(fontsize=7)
     return ax
+
+
+def plot_branches(result: Mapping, ax=None):
+    """The branch diagram of a knot: ε (corrected for the discretisation) against w/L, one
+    curve per state of its census, each state's extrapolated ε*_s ± error at w = 0 (filled
+    square) and the structure route's value where it has one (open diamond); points after a
+    branch's event (class change, jump, merger) are crosses, not fitted.
+
+    ``result``: the dict of :func:`stiffknots.studies.thin_states.thin_limit_states`.
+    """
+    ax = _new_ax(ax, (6.4, 4.4))
+    wmax = 0.0
+    for i, s in enumerate(result["states"]):
+        col = f"C{i % 10}"
+        pts = s["points"]
+        if not pts:
+            continue
+        wmax = max(wmax, max(p["w_over_L"] for p in pts))
+        inside = [p for p in pts if p["in_fit"]]
+        after = [p for p in pts if not p["in_fit"]]
+        ground = " — thin-limit ground" if result.get("ground") == i else ""
+        label = f"{i}: {s['shape']} (ε = {s['epsilon']:.2f} at the atlas width){ground}"
+        if inside:
+            ax.plot([p["w_over_L"] for p in inside], [p["epsilon"] for p in inside], "o-",
+                    color=col, ms=3, lw=1, label=label)
+        if after:
+            ax.plot([p["w_over_L"] for p in after], [p["epsilon"] for p in after], "x",
+                    color=col, ms=5, label=None if inside else label)
+        if s.get("epsilon_thin") is not None:
+            ax.errorbar([0.0], [s["epsilon_thin"]], yerr=[s["error"] or 0.0], fmt="s",
+                        color=col, capsize=3, ms=5)
+        if s.get("structure_epsilon") is not None:
+            ax.plot([0.0], [s["structure_epsilon"]], "D", mfc="none", color=col, ms=8)
+    ax.plot([], [], "ks", label="ε*_s at w = 0 (extrapolated)")
+    ax.plot([], [], "kD", mfc="none", label="structure route at w = 0")
+    n = next((s["points"][0]["beads"] for s in result["states"] if s["points"]), None)
+    ax.set_xlabel(f"w/L (tube model, N = {n})" if n else "w/L")
+    ax.set_ylabel("ε = E L / C")
+    ax.set_xlim(-0.03 * (wmax or 1.0), (wmax or 1.0) * 1.06)
+    ax.set_title(f"{result.get('knot', '')}: every state followed to w = 0")
+    ax.legend(fontsize=7)
+    return ax

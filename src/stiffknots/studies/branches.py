@@ -178,8 +178,9 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
         pt["in_fit"] = event is None
         points.append(pt)
         chains.append(x)
+        now = f"; {event['kind']}" if event and event["w_over_L"] == wl else ""
         say(f"{name} {tag}: w/L = {wl:g}, N = {n}: ε_N = {r.best.epsilon:.5f} ({shape}; "
-            f"step {step:.4f} L{'; ' + event['kind'] if event and event['w_over_L'] == wl else ''})")
+            f"step {step:.4f} L{now})")
         prev = x
     kind = "CB" if s_label == "CB" else "other"
     last = max((i for i, p in enumerate(points) if p["in_fit"]), default=len(points) - 1)

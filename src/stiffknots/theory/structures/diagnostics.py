@@ -12,7 +12,8 @@ from numba import njit
 from stiffknots.geometry import seg_dist2
 from stiffknots.theory.structures.solver import LevelSolution, StructureResult
 
-__all__ = ["cage_details", "common_details", "eighty_details", "end_curvature_vectors"]
+__all__ = ["arc_distance", "cage_details", "common_details", "eighty_details",
+           "end_curvature_vectors"]
 
 
 @njit(cache=True)
@@ -32,7 +33,7 @@ def _polyline_distance(P, Q, i0, i1, j0, j1):
     return np.sqrt(best), bi, bj
 
 
-def _arc_distance(P: np.ndarray, Q: np.ndarray, trim: float) -> tuple[float, float, float]:
+def arc_distance(P: np.ndarray, Q: np.ndarray, trim: float) -> tuple[float, float, float]:
     """Distance between two arcs without a fraction ``trim`` of each at both ends.
 
     Returns ``(distance, s_P, s_Q)`` with the arc-length fractions of the closest segments.
@@ -145,7 +146,7 @@ def cage_details(res: StructureResult) -> dict[str, Any]:
         d_pairs = {}
         for i in range(4):
             for j in range(i + 1, 4):
-                d, si, sj = _arc_distance(pts[i], pts[j], trim)
+                d, si, sj = arc_distance(pts[i], pts[j], trim)
                 d_pairs[f"{names[i]} / {names[j]}"] = {"distance": d, "s_i": si, "s_j": sj}
         dist[f"without {trim:.0%} of each end"] = d_pairs
     # azimuth of every arc about the axis AB, in the frame (a_perp, e x a_perp)

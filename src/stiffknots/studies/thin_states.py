@@ -1,0 +1,226 @@
+"""The thin-limit ground state of a knot: its census at the atlas width, every state followed to
+w = 0, the lowest limit (§V A, §VI).
+
+Gallotti & Pierre-Louis, "Stiff knots", PRE 2007: the paper's question is the ground state in
+the thin limit w/L → 0. The ground state can change with the width, so one annealed series
+answers it only if the series happens to sit in the right state. This study
+
+1. anneals the knot in the tube model at the atlas's width (w = 1/√2, N = 150, w/L = 0.0047;
+   :func:`~stiffknots.problems.closed_plan.plan_anneal`, the tube's verdict rule of three
+   independent searches) and takes the **census** of its final chains
+   (:func:`stiffknots.analysis.census`: states within 15 % of the lowest);
+2. follows **every state** (or the ``states`` lowest) down a ladder of w/L by continuation and
+   extrapolates each to its own ``ε*_s`` (:func:`stiffknots.studies.branches.follow_states`);
+3. names the **thin-limit ground state** — the lowest ``ε*_s`` — with its margin over the next
+   state in their combined errors, and says where it is not the finite-width ground (the
+   branches cross) and near which w/L;
+4. sets beside each ``ε*_s`` the structure route's value at w = 0 (:func:`structure_route`:
+   the structure graph of the state's thinnest chain solved at w = 0, or the named structure
+   of its class where the graph has a line-braid) — the two routes agree when they differ by
+   less than twice the branch's error or 0.5 %.
+
+Nothing here but ``epsilon_thin`` values are thin-limit numbers: every other states its w/L
+and N.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+from stiffknots._version import __version__
+from stiffknots.problems import validate as V
+from stiffknots.problems.base import solve
+from stiffknots.studies.branches import LADDER, follow_states
+
+__all__ = ["BUDGETS", "AGREE_REL", "structure_route", "thin_limit_states"]
+
+#: What one run spends: the ladder of w/L and how each width is reached.
+BUDGETS: dict[str, dict[str, Any]] = {
+    "small": {"widths": (0.004, 0.002, 0.001, 0.0005), "rel_error": 2e-3,
+              "relax_factor": 0.1, "replicas": 2, "measure_k": False},
+    "default": {"widths": LADDER, "rel_error": 1e-3, "relax_factor": 0.2, "replicas": 2,
+                "measure_k": True},
+}
+
+#: Two routes agree within twice the branch's error or this fraction of ε.
+AGREE_REL = 5e-3
+
+
+def _crossing(lower: dict, finite: dict) -> float | None:
+    """The widest ladder width at which branch ``lower`` (the thin-limit ground) lies below
+    branch ``finite`` (the ground at the atlas width), both still in their states."""
+    for a, b in zip(lower["points"], finite["points"], strict=False):
+        if a["in_fit"] and b["in_fit"] and a["epsilon"] < b["epsilon"]:
+            return a["w_over_L"]
+    return None
+
+
+def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
+                    tag: str = "") -> dict[str, Any]:
+    """The structure route (w = 0) of a followed state: the structure graph of its thinnest
+    chain before any event turned into the w = 0 problem and solved
+    (:func:`stiffknots.analysis.structure_route.solve_chain`, read at ``max(w, 0.5)``); where
+    the graph has a line-braid the route cannot translate yet, the named structure of the
+    state's class (CB(i), the 80, the 4-fold cage); else none, with the reason.
+
+    Returns ``{"epsilon", "error", "name", "method", "keeps_knot", "min_arc_distance",
+    "minimum", "negative_modes", "w_over_L", "note"}`` (``epsilon`` None when there is no
+    route; a route that is not a converged minimum or lets strands meet is not compared).
+    """
+    from stiffknots.analysis.structure_route import StructureRouteError, solve_chain
+    from stiffknots.studies.thin_limit import CLASSIFY_D_MIN, structure_value
+
+    say = say or (lambda _s: None)
+    pts = branch["points"]
+    last = max((i for i, p in enumerate(pts) if p["in_fit"]), default=len(pts) - 1)
+    p = pts[last]
+    out: dict[str, Any] = {"epsilon": None, "error": None, "name": None, "method": None,
+                           "keeps_knot": None, "min_arc_distance": None, "minimum": None,
+                           "negative_modes": None,
+                           "w_over_L": p["w_over_L"], "note": None}
+    try:
+        with warnings.catch_warnings():   # read at d > w on purpose (CLASSIFY_D_MIN)
+            warnings.simplefilter("ignore")
+            r = solve_chain(branch["chains"][last], max(p["w"], CLASSIFY_D_MIN))
+    except StructureRouteError as exc:
+        named = structure_value(branch["start"]["label"], branch["start"]["multiplicity"])
+        if named is None:
+            out["note"] = f"no structure route: {exc}"
+            return out
+        out.update(epsilon=named["epsilon"], error=named["error"], name=named["name"],
+                   method="named structure (theory.structures)", keeps_knot=True,
+                   note=f"the chain's graph is not translated ({exc}); the named "
+                        f"{named['name']} solved instead")
+        return out
+    out.update(epsilon=r.epsilon, error=r.error, name=r.name,
+               method=f"the graph of the chain at w/L = {p['w_over_L']:g} solved at w = 0 "
+                      f"({r.arcs} arcs, {r.junctions} junctions)",
+               keeps_knot=r.keeps_knot, min_arc_distance=r.min_arc_distance,
+               minimum=r.minimum, negative_modes=r.negative_modes)
+    if not r.keeps_knot:
+        out["note"] = (f"the w = 0 solution brings two arcs within {r.min_arc_distance:.2g} L "
+                       "of each other away from the junctions: strands may have passed; not "
+                       "compared")
+    elif not r.minimum:
+        out["note"] = (f"not a converged minimum ({r.negative_modes} negative mode(s), error "
+                       f"{r.error:.2g}): not compared")
+    say(f"{branch['knot']} {tag}: structure route ({r.name}, {r.arcs} arcs): ε = "
+        f"{r.epsilon:.6f} ± {r.error:.1g}"
+        + ("" if r.keeps_knot else " — FLAGGED: strands meet away from the junctions"))
+    return out
+
+
+def thin_limit_states(knot: Any, budget: str = "default", seed: int = 0, *,
+                      states: int | None = None, window: float = 0.15,
+                      runner: Callable[[Any, str], Any] | None = None,
+                      say: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Census, branches and the thin-limit ground state of a knot (module docstring).
+
+    Parameters
+    ----------
+    knot
+        A catalogue entry or name.
+    budget : str
+        ``"small"`` (4 widths, 0.004 … 0.0005, k by the polygon rule) or ``"default"`` (9
+        widths down to 0.00025, k measured per branch); :data:`BUDGETS`.
+    seed : int
+        Seed of the census's annealing and of every relaxation.
+    states : int or None
+        Follow only the lowest ``states`` states of the census (default: all).
+    window : float
+        The census's window above the lowest ε.
+    runner, say
+        As :func:`stiffknots.studies.thin_limit.thin_limit`.
+
+    Returns
+    -------
+    dict
+        ``knot``, ``budget``, ``seed``, ``version``, ``wall_time``; ``census`` (the anneal's
+        ``epsilon``, ``converged``, ``width``, replicas and the census's states);
+        ``states``: one per followed state, by the census's order — ``shape``,
+        ``structure``, ``epsilon`` (at the atlas width), ``epsilon_thin``, ``error``,
+        ``event``, ``structure_epsilon`` and ``structure_error`` (the structure route at
+        w = 0, or None), ``structure_route`` (how, and its note), ``agree``, ``points``,
+        ``chains``, ``fit``, ``discretisation``; ``ground`` (the index into ``states`` of the lowest
+        ``epsilon_thin``), ``margin`` (the next state's ``epsilon_thin`` minus the ground's,
+        and in combined errors), ``crossing`` (None, or the width at which the thin-limit
+        ground first lies below the finite-width ground); and, the ground's, ``shape``,
+        ``epsilon_thin``, ``error``.
+    """
+    from stiffknots.analysis.census import census
+    from stiffknots.knots.catalogue import Knot, get_knot
+    from stiffknots.problems.closed_plan import plan_anneal
+
+    V.choice("budget", budget, tuple(BUDGETS))
+    seed = V.seed(seed)
+    if states is not None:
+        states = V.integer("states", states, 1, 1000)
+    k = knot if isinstance(knot, Knot) else get_knot(knot)
+    run = runner or (lambda p, _label: solve(p))
+    say = say or (lambda _s: None)
+    t0 = time.time()
+    plan = plan_anneal(k, exclusion="tube", seed=seed)
+    res = run(plan.problem(), f"census of {k.name}: anneal at the atlas width")
+    if res.interrupted:
+        raise KeyboardInterrupt
+    items = [{"coords": r.coords, "epsilon": r.epsilon, "label": r.observables["label"],
+              "multiplicity": r.observables.get("multiplicity"),
+              "search": r.lineage if r.lineage is not None else i,
+              "structure": r.observables.get("structure")}
+             for i, r in enumerate(res.replicas)]
+    c = census(items, window=window)
+    width = res.width.as_dict()
+    say(f"{k.name}: census at {width['text']}: {len(c.states)} state(s) within "
+        f"{100 * window:g} % of {c.ground.epsilon:.3f} from {len(items)} replicas: "
+        + ", ".join(f"{s.name} {s.epsilon:.3f} ({s.searches} searches)" for s in c.states))
+    chosen = c.states[:states] if states else c.states
+    b = BUDGETS[budget]
+    fs = follow_states(k, [{"coords": items[s.representative]["coords"],
+                            "tag": f"state {i} ({s.name})"} for i, s in enumerate(chosen)],
+                       seed=seed, runner=run, say=say, **b)
+    rows = []
+    for i, (s, br) in enumerate(zip(chosen, fs["branches"], strict=True)):
+        route = structure_route(br, say=say, tag=f"state {i} ({s.name})")
+        eps_t, err = br["epsilon_thin"], br["error"]
+        agree = None
+        if route["epsilon"] is not None and eps_t is not None and route["keeps_knot"] \
+                and route.get("minimum", True):
+            agree = abs(eps_t - route["epsilon"]) <= max(2 * (err or 0.0),
+                                                         AGREE_REL * route["epsilon"])
+        rows.append({
+            "shape": s.name, "label": s.label, "multiplicity": s.multiplicity,
+            "structure": s.structure, "epsilon": s.epsilon, "searches": s.searches,
+            "epsilon_thin": eps_t, "error": err, "event": br["event"],
+            "structure_epsilon": route["epsilon"], "structure_error": route["error"],
+            "structure_name": route["name"], "structure_route": route,
+            "agree": agree, "points": br["points"], "chains": br["chains"],
+            "fit": br["fit"], "discretisation": br["discretisation"],
+            "parameters": br["parameters"]})
+    g = fs["ground"]
+    margin = crossing = None
+    if g is not None:
+        others = [r for i, r in enumerate(rows) if i != g and r["epsilon_thin"] is not None]
+        if others:
+            nxt = min(others, key=lambda r: r["epsilon_thin"])
+            gap = nxt["epsilon_thin"] - rows[g]["epsilon_thin"]
+            sig = math.hypot(nxt["error"] or 0.0, rows[g]["error"] or 0.0)
+            margin = {"next": rows.index(nxt), "gap": gap,
+                      "sigmas": gap / sig if sig > 0 else None}
+        if g != 0:
+            crossing = _crossing(fs["branches"][g], fs["branches"][0])
+    ground = rows[g] if g is not None else None
+    return {"knot": k.name, "budget": budget, "seed": seed, "version": __version__,
+            "census": {"epsilon": res.best.epsilon, "converged": bool(res.converged),
+                       "convergence": res.convergence, "width": width,
+                       "replicas": len(items), "window": window,
+                       "states": [s.to_dict() for s in c.states]},
+            "states": rows, "ground": g, "margin": margin, "crossing": crossing,
+            "shape": None if ground is None else ground["shape"],
+            "epsilon_thin": None if ground is None else ground["epsilon_thin"],
+            "error": None if ground is None else ground["error"],
+            "parameters": {**b, "widths": list(b["widths"]), "states": states},
+            "wall_time": time.time() - t0}
