@@ -64,8 +64,9 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
     """The structure route (w = 0) of a followed state: the structure graph of its thinnest
     chain before any event turned into the w = 0 problem and solved
     (:func:`stiffknots.analysis.structure_route.solve_chain`, read at ``max(w, 0.5)``); where
-    the graph has a line-braid the route cannot translate yet, the named structure of the
-    state's class (CB(i), the 80, the 4-fold cage); else none, with the reason.
+    the graph has a line-braid the route cannot translate yet, or its solution is no converged
+    minimum or lets strands meet, the named structure of the state's class (CB(i), the 80, the
+    4-fold cage) with a note saying why; else none, or the flagged solution, not compared.
 
     Returns ``{"epsilon", "error", "name", "method", "keeps_knot", "min_arc_distance",
     "minimum", "negative_modes", "w_over_L", "note"}`` (``epsilon`` None when there is no
@@ -82,35 +83,44 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
                            "keeps_knot": None, "min_arc_distance": None, "minimum": None,
                            "negative_modes": None,
                            "w_over_L": p["w_over_L"], "note": None}
+    named = structure_value(branch["start"]["label"], branch["start"]["multiplicity"])
+
+    def use_named(why: str) -> dict[str, Any]:
+        out.update(epsilon=named["epsilon"], error=named["error"], name=named["name"],
+                   method="named structure (theory.structures)", keeps_knot=True,
+                   minimum=True, note=f"{why}; the named {named['name']} solved instead")
+        return out
+
     try:
         with warnings.catch_warnings():   # read at d > w on purpose (CLASSIFY_D_MIN)
             warnings.simplefilter("ignore")
             r = solve_chain(branch["chains"][last], max(p["w"], CLASSIFY_D_MIN))
     except StructureRouteError as exc:
-        named = structure_value(branch["start"]["label"], branch["start"]["multiplicity"])
         if named is None:
             out["note"] = f"no structure route: {exc}"
             return out
-        out.update(epsilon=named["epsilon"], error=named["error"], name=named["name"],
-                   method="named structure (theory.structures)", keeps_knot=True,
-                   note=f"the chain's graph is not translated ({exc}); the named "
-                        f"{named['name']} solved instead")
-        return out
+        return use_named(f"the chain's graph is not translated ({exc})")
+    say(f"{branch['knot']} {tag}: structure route ({r.name}, {r.arcs} arcs): ε = "
+        f"{r.epsilon:.6f} ± {r.error:.1g}"
+        + ("" if r.keeps_knot else " — FLAGGED: strands meet away from the junctions")
+        + ("" if r.minimum else f" — not a converged minimum ({r.negative_modes} negative "
+                                f"mode(s))"))
+    problem = None
+    if not r.keeps_knot:
+        problem = (f"its w = 0 solution brings two arcs within {r.min_arc_distance:.2g} L of "
+                   "each other away from the junctions (strands may have passed)")
+    elif not r.minimum:
+        problem = (f"its w = 0 solution is not a converged minimum ({r.negative_modes} "
+                   f"negative mode(s), error {r.error:.2g})")
+    if problem is not None and named is not None:
+        return use_named(f"the chain's graph ({r.name}, {r.arcs} arcs): {problem}")
     out.update(epsilon=r.epsilon, error=r.error, name=r.name,
                method=f"the graph of the chain at w/L = {p['w_over_L']:g} solved at w = 0 "
                       f"({r.arcs} arcs, {r.junctions} junctions)",
                keeps_knot=r.keeps_knot, min_arc_distance=r.min_arc_distance,
                minimum=r.minimum, negative_modes=r.negative_modes)
-    if not r.keeps_knot:
-        out["note"] = (f"the w = 0 solution brings two arcs within {r.min_arc_distance:.2g} L "
-                       "of each other away from the junctions: strands may have passed; not "
-                       "compared")
-    elif not r.minimum:
-        out["note"] = (f"not a converged minimum ({r.negative_modes} negative mode(s), error "
-                       f"{r.error:.2g}): not compared")
-    say(f"{branch['knot']} {tag}: structure route ({r.name}, {r.arcs} arcs): ε = "
-        f"{r.epsilon:.6f} ± {r.error:.1g}"
-        + ("" if r.keeps_knot else " — FLAGGED: strands meet away from the junctions"))
+    if problem is not None:
+        out["note"] = f"{problem}: not compared"
     return out
 
 

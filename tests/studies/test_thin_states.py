@@ -1,0 +1,47 @@
+"""The thin-limit ground state's pieces (studies/thin_states): the structure route of a
+followed state — the chain's own graph where it can be translated, the named structure of its
+class where it cannot — and the input checks."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from helpers import DATA
+from stiffknots.errors import InvalidParameter
+from stiffknots.studies.thin_states import structure_route, thin_limit_states
+
+
+def _branch(chain, label, mult, w_over_L=0.00025, beads=173):
+    pts = [{"w_over_L": w_over_L, "w": w_over_L * beads, "in_fit": True}]
+    return {"knot": "k", "points": pts, "chains": [chain],
+            "start": {"label": label, "multiplicity": mult}}
+
+
+def test_a_cage_branch_is_solved_from_its_own_chain():
+    x = np.load(DATA / "analysis" / "4_1_tube_cage_thin.npy")
+    r = structure_route(_branch(x, "4C", None))
+    assert r["epsilon"] == pytest.approx(126.4724695555, abs=1e-6)
+    assert r["minimum"] and r["keeps_knot"] and r["note"] is None
+    assert "w/L = 0.00025 solved at w = 0 (4 arcs, 2 junctions)" in r["method"]
+
+
+def test_a_circular_braid_falls_back_to_its_named_structure_and_says_why():
+    x = np.load(DATA / "analysis" / "3_1_seed1_r1.npy")
+    r = structure_route(_branch(x, "CB", 2, w_over_L=0.0047, beads=150))
+    assert r["epsilon"] == pytest.approx(8 * math.pi**2, rel=1e-9) and r["name"] == "CB(2)"
+    assert "line-braid of multiplicity 2" in r["note"] and r["minimum"] is True
+
+
+def test_an_other_state_without_a_translatable_graph_has_no_route():
+    x = np.load(DATA / "analysis" / "3_1_seed1_r1.npy")
+    r = structure_route(_branch(x, "other", None, w_over_L=0.0047, beads=150))
+    assert r["epsilon"] is None and r["note"].startswith("no structure route")
+
+
+@pytest.mark.parametrize("kw", [dict(budget="huge"), dict(states=0), dict(seed=-1)])
+def test_bad_input_is_refused_before_any_work(kw):
+    with pytest.raises(InvalidParameter):
+        thin_limit_states("3_1", **kw)
