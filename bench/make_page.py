@@ -306,6 +306,29 @@ def verdict_rules(d: dict) -> list[str]:
     return out
 
 
+def thin_states(d: dict) -> list[str]:
+    out = ["| knot | budget | states | thin-limit ground: ε*_s ± error | structure route | "
+           "margin | other states (ε*_s / route) | wall s |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+
+    def num(x, f=".4f"):
+        return "—" if x is None else format(x, f)
+
+    for r in d["knots"]:
+        g = r["states"][r["ground"]] if r["ground"] is not None else None
+        others = "; ".join(f"{s['shape']} {num(s['epsilon_thin'])} / {num(s['structure_epsilon'])}"
+                           + ("" if s["agree"] in (True, None) else " (disagree)")
+                           for i, s in enumerate(r["states"]) if i != r["ground"])
+        out.append(f"| {r['knot']} | {r['budget']} | {len(r['states'])} | "
+                   f"{g['shape'] if g else '—'} {num(r['epsilon_thin'])} ± "
+                   f"{num(r['error'], '.2g')} | {num(g['structure_epsilon'] if g else None)} | "
+                   f"{num(r['margin_sigmas'], '.1f')}σ | {others or '—'} | "
+                   f"{num(r['wall_seconds'], '.0f')} |")
+    out += ["", f"{d['agree']} of {d['compared']} states with both routes agree; "
+                f"{d['states']} states followed in {d['wall_seconds']:,.0f} s wall."]
+    return out
+
+
 #: (file name, title, what it measures, the script, renderer), in the order of the page
 BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
     ("defaults_survey", "`stiffknots anneal` with its defaults, every prime knot through 8 "
@@ -340,6 +363,9 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "tube atlases of the same knots under other rules and budgets, each verdict against the "
      "lowest state any of them found", "python bench/verdict_rules.py LABEL=DB:K ... --also "
      "DIR", verdict_rules),
+    ("thin_states", "Every state to w = 0", "`stiffknots thin-limit K` as typed: each state of "
+     "the census followed to w/L → 0, both routes, the thin-limit ground state and the time",
+     "python bench/thin_states.py 3_1:small 4_1 5_2 ...", thin_states),
     ("small_jobs", "Small jobs", "wall and CPU seconds of short commands as typed (fresh "
      "processes, kernels cached)", "python bench/small_jobs.py", small_jobs),
     ("last_run", "The kernel and the time to the paper's energies (`make bench`)",

@@ -98,7 +98,7 @@ def test_thin_limit_figure_eight_names_its_thin_limit_ground_state():
     names = [s["shape"] for s in d["states"]]
     assert "4C" in names and len(names) >= 2
     cage = d["states"][names.index("4C")]
-    assert cage["structure_name"] == "4C" and cage["agree"] is True
+    assert cage["structure_name"] == "2 point-braids" and cage["agree"] is True
     assert abs(cage["epsilon_thin"] - 126.47247) < max(3 * cage["error"], 0.005 * 126.5)
     g = d["states"][d["ground"]]
     assert d["epsilon_thin"] == g["epsilon_thin"] == min(

@@ -64,13 +64,22 @@ def test_a_branch_that_stays_in_its_state_is_fitted_to_its_limit():
     assert len(b["chains"]) == 4 and b["parameters"]["beads"] == 100
 
 
-def test_a_class_change_and_a_jump_are_events_and_end_the_fit():
+def test_a_class_change_is_recorded_and_followed_a_jump_ends_the_fit():
     cage, other = _chain("4_1_tube_cage"), _chain("4_1_tube_other")
     widths = (0.004, 0.003, 0.002, 0.001)
-    runner, _ = _scripted([(cage, 128.9), (cage, 128.2), (other, 127.0), (other, 126.4)])
+    # a continuous class change (the same curve read as another class: step 0) is an event
+    # that the fit goes through: the state deformed into another class, and is followed
+    runner, _ = _scripted([(cage, 128.9), (cage, 128.2), (cage[::-1], 127.0),
+                           (cage, 126.4)])
     b = follow_state("4_1", cage, widths=widths, beads=150, measure_k=False, runner=runner)
-    assert b["event"] == {"kind": "changed class", "w_over_L": 0.002, "detail": "4C → other"}
-    assert [p["in_fit"] for p in b["points"]] == [True, True, False, False]
+    assert b["event"] is None and b["events"] == []
+    # the cage's chain followed by the `other`'s: read `other` there, but 0.052 L away — a jump
+    runner, _ = _scripted([(cage, 128.9), (cage, 128.2), (other, 127.0)])
+    b = follow_state("4_1", cage, widths=(0.004, 0.003, 0.002), beads=150, measure_k=False,
+                     runner=runner)
+    assert b["event"]["kind"] == "jumped" and b["event"]["w_over_L"] == 0.002
+    assert [e["kind"] for e in b["events"]] == ["jumped"]
+    assert [p["in_fit"] for p in b["points"]] == [True, True, False]
     assert b["epsilon_thin"] is not None          # two points before the event
     # the same class but another curve, more than 0.03 L away (5_2's cage, also a 4C): a jump
     # (last: the next relaxation would refuse it, a 5_2 is not a 4_1)
@@ -79,6 +88,31 @@ def test_a_class_change_and_a_jump_are_events_and_end_the_fit():
                      runner=runner)
     assert b["event"]["kind"] == "jumped" and b["event"]["w_over_L"] == 0.001
     assert [p["in_fit"] for p in b["points"]] == [True, True, False]
+
+
+def test_a_continuous_change_of_class_is_recorded_and_fitted_through(monkeypatch):
+    """The classifier's verdict changes along the branch while the curve moves by less than
+    a jump: recorded as 'changed class', the fit goes on (6_1's `other` becoming a cage)."""
+    import stiffknots.studies.branches as br
+
+    cage = _chain("4_1_tube_cage")
+    reads = iter([("other", "other", None, "s"), ("other", "other", None, "s"),
+                  ("4C", "4C", None, "s"), ("4C", "4C", None, "s")])
+    start = [True]
+
+    def fake_read(x, w):
+        if start[0]:                      # the start chain: read as `other`
+            start[0] = False
+            return ("other", "other", None, "s")
+        return next(reads)
+    monkeypatch.setattr(br, "_read", fake_read)
+    runner, _ = _scripted([(cage, 128.9), (cage, 128.2), (cage, 127.6), (cage, 127.0)])
+    b = follow_state("4_1", cage, widths=(0.004, 0.003, 0.002, 0.001), beads=150,
+                     measure_k=False, runner=runner)
+    assert b["event"] is None and all(p["in_fit"] for p in b["points"])
+    assert [(e["kind"], e["w_over_L"]) for e in b["events"]] == [("changed class", 0.002)]
+    assert b["events"][0]["detail"].startswith("other → 4C")
+    assert b["structure_route"]["name"] == "4C"   # the class it became
 
 
 def test_two_branches_that_meet_at_one_width_merge_there():

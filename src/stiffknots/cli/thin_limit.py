@@ -144,14 +144,14 @@ def _table(res) -> None:
                 "event"):
         t.add_column(col, justify="left" if col in ("state", "event") else "right")
     for i, st in enumerate(res["states"]):
-        ev = st["event"]
+        evs = st.get("events") or ([st["event"]] if st["event"] else [])
         t.add_row(str(i) + (" *" if i == res["ground"] else ""), escape(st["shape"]),
                   f"{st['epsilon']:.3f}", _num(st["epsilon_thin"]), _num(st["error"], ".2g"),
                   (f"{st['structure_epsilon']:.4f}"
                    if st["structure_epsilon"] is not None else "—"),
                   {True: "yes", False: "NO", None: "—"}[st["agree"]],
-                  escape("—" if ev is None else f"{ev['kind']} at w/L {ev['w_over_L']:g}: "
-                                                 f"{ev['detail']}"))
+                  escape("; ".join(f"{e['kind']} at w/L {e['w_over_L']:g}: {e['detail']}"
+                                   for e in evs) or "—"))
     out.print(t)
     n = res["states"][0]["points"][0]["beads"] if res["states"] else None
     out.print(f"ladder: w/L {', '.join(f'{w:g}' for w in res['parameters']['widths'])} at "

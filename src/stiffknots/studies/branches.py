@@ -13,14 +13,23 @@ then the final minimiser, knot type verified; a chain admissible for a tube is a
 any thinner one). Each point records ε, N, the shape class, the structure (§V B) and its shape
 distance from the previous point (:func:`~stiffknots.analysis.identity.shape_distance`).
 
-A branch is the run of points that stay in the state: same class and circular-braid index as
-the census state, and no step longer than :data:`JUMP` (a continuous deformation moves a chain
-by ≲ 0.01 L between neighbouring widths of the ladder; distinct states lie ≥ 0.05 L apart). The
-first point that leaves is recorded as an **event** — ``changed class`` or ``jumped`` — never
-hidden, and the fit uses the points before it. Two branches whose points at one width are one
-state (:func:`~stiffknots.analysis.identity.shape_distance` within
-:data:`~stiffknots.analysis.identity.SAME_STATE_DISTANCE`, ε within 0.1 %) **merged** there;
-the higher-ranked one's later points are not fitted.
+A branch is the run of points reached continuously: no step longer than :data:`JUMP` (a
+continuous deformation moves a chain by ≲ 0.01 L between neighbouring widths of the ladder;
+distinct states lie ≥ 0.05 L apart). What happens on the way is recorded as **events**
+(``events``), never hidden:
+
+* ``changed class`` — the shape class read at a point differs from the one before (6_1's
+  `other` becomes a 4-fold cage below w/L ≈ 0.001). The step is small: the state deformed
+  continuously into another class, and the branch — the same state, followed — is still fitted
+  through it; its thin limit is the limit of what it became;
+* ``jumped`` — a step longer than :data:`JUMP`: the relaxation left the state; the fit stops
+  before it;
+* ``merged`` — two branches whose points at one width are one state
+  (:func:`~stiffknots.analysis.identity.shape_distance` within
+  :data:`~stiffknots.analysis.identity.SAME_STATE_DISTANCE`, ε within 0.1 %): the
+  higher-ranked one's points from there are not fitted (they are the other's).
+
+``event`` is the event that ended the fit (a jump or a merger), or None.
 
 Each branch's points are corrected for the discretisation (``eps = eps_N (1 + k/N^2)``, ``k``
 measured on the branch's thinnest fitted point relaxed again at 2 N, or the polygon rule
@@ -120,10 +129,11 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
         width), ``shape`` (the class the branch keeps), ``points`` (each ``w_over_L``,
         ``beads``, ``w``, ``width``, ``epsilon_raw``, ``epsilon`` (corrected), ``sigma``,
         ``shape``, ``structure``, ``step`` (shape distance from the previous point),
-        ``spread``, ``in_fit``), ``event`` (None, or ``{"kind", "w_over_L", "detail"}``),
+        ``spread``, ``in_fit``), ``events`` (each ``{"kind", "w_over_L", "detail"}``),
+        ``event`` (the one that ended the fit, or None),
         ``epsilon_thin``, ``error``, ``fit``, ``discretisation``, ``structure_route`` (the
-        known w = 0 value of the class, or None), ``chains`` (one per point), ``parameters``,
-        ``version``, ``seed``, ``wall_time``.
+        named w = 0 value of the class at the thinnest fitted point, or None), ``chains`` (one
+        per point), ``parameters``, ``version``, ``seed``, ``wall_time``.
     """
     from stiffknots.analysis.identity import shape_distance
     from stiffknots.chain import Chain
@@ -151,6 +161,8 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
     points: list[dict] = []
     chains: list[np.ndarray] = []
     event = None
+    events: list[dict] = []
+    key = s_key
     prev = x0
     for wl in ws:
         width = Width.tube(n, w_over_L=wl)
@@ -169,16 +181,21 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
               "multiplicity": mult, "structure": structure, "step": step,
               "spread": (max(same) - min(same)) if len(same) > 1 else 0.0,
               "in_fit": event is None}
-        if event is None and (label, mult if label == "CB" else None) != s_key:
-            event = {"kind": "changed class", "w_over_L": wl,
-                     "detail": f"{s_name} → {shape}"}
-        elif event is None and step > JUMP:
+        now = ""
+        if event is None and step > JUMP:
             event = {"kind": "jumped", "w_over_L": wl,
                      "detail": f"{step:.3f} L from the point before (more than {JUMP:g} L)"}
+            events.append(event)
+            now = "; jumped"
+        elif event is None and (label, mult if label == "CB" else None) != key:
+            was = points[-1]["shape"] if points else s_name
+            events.append({"kind": "changed class", "w_over_L": wl,
+                           "detail": f"{was} → {shape} (step {step:.4f} L: continuous)"})
+            now = "; changed class"
+        key = (label, mult if label == "CB" else None)
         pt["in_fit"] = event is None
         points.append(pt)
         chains.append(x)
-        now = f"; {event['kind']}" if event and event["w_over_L"] == wl else ""
         say(f"{name} {tag}: w/L = {wl:g}, N = {n}: ε_N = {r.best.epsilon:.5f} ({shape}; "
             f"step {step:.4f} L{now})")
         prev = x
@@ -212,14 +229,15 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
             say(f"{name} {tag}: discretisation at w/L = {wl_k:g}: ε_{n} = {e1:.5f}, "
                 f"ε_{n2} = {e2:.5f}: k = {k_meas:.3f} (polygon rule ε/6 = {k_rule:.3f})")
     fit, eps_thin, err = correct_and_fit(points, n, disc)
-    struct = structure_value(s_label, s_mult)
+    struct = structure_value(points[last]["label"], points[last]["multiplicity"])
     if struct is not None and eps_thin is not None:
         struct["difference"] = eps_thin - struct["epsilon"]
         struct["in_error_bars"] = abs(struct["difference"]) / err if err else None
     return {"knot": name, "tag": tag,
             "start": {"shape": s_name, "label": s_label, "multiplicity": s_mult,
                       "structure": s_struct},
-            "shape": s_name, "points": points, "event": event, "epsilon_thin": eps_thin,
+            "shape": s_name, "points": points, "event": event, "events": events,
+            "epsilon_thin": eps_thin,
             "error": err, "fit": fit, "discretisation": disc, "structure_route": struct,
             "chains": chains, "version": __version__, "seed": seed,
             "parameters": {"widths": ws, "beads": n, "rel_error": rel_error,
@@ -252,6 +270,7 @@ def follow_states(knot: Any, states: Sequence[dict], **kw: Any) -> dict[str, Any
                     if b["event"] is None:
                         b["event"] = {"kind": "merged", "w_over_L": pb["w_over_L"],
                                       "detail": f"with {a['tag']}"}
+                        b["events"].append(b["event"])
                         _refit(b)
                     break
     fitted = [(b["epsilon_thin"], i) for i, b in enumerate(branches)

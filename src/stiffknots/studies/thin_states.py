@@ -83,7 +83,8 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
                            "keeps_knot": None, "min_arc_distance": None, "minimum": None,
                            "negative_modes": None,
                            "w_over_L": p["w_over_L"], "note": None}
-    named = structure_value(branch["start"]["label"], branch["start"]["multiplicity"])
+    named = structure_value(p.get("label", branch["start"]["label"]),
+                            p.get("multiplicity", branch["start"]["multiplicity"]))
 
     def use_named(why: str) -> dict[str, Any]:
         out.update(epsilon=named["epsilon"], error=named["error"], name=named["name"],
@@ -205,6 +206,7 @@ def thin_limit_states(knot: Any, budget: str = "default", seed: int = 0, *,
             "shape": s.name, "label": s.label, "multiplicity": s.multiplicity,
             "structure": s.structure, "epsilon": s.epsilon, "searches": s.searches,
             "epsilon_thin": eps_t, "error": err, "event": br["event"],
+            "events": br["events"], "shape_thin": br["points"][-1]["shape"],
             "structure_epsilon": route["epsilon"], "structure_error": route["error"],
             "structure_name": route["name"], "structure_route": route,
             "agree": agree, "points": br["points"], "chains": br["chains"],
