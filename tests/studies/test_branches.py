@@ -80,7 +80,8 @@ def test_a_class_change_is_recorded_and_followed_a_jump_ends_the_fit():
     assert b["event"]["kind"] == "jumped" and b["event"]["w_over_L"] == 0.002
     assert [e["kind"] for e in b["events"]] == ["jumped"]
     assert [p["in_fit"] for p in b["points"]] == [True, True, False]
-    assert b["epsilon_thin"] is not None          # two points before the event
+    # the state ended: no limit of its own; its two points before are kept as `partial`
+    assert b["epsilon_thin"] is None and b["partial"]["epsilon_thin"] is not None
     # the same class but another curve, more than 0.03 L away (5_2's cage, also a 4C): a jump
     # (last: the next relaxation would refuse it, a 5_2 is not a 4_1)
     runner, _ = _scripted([(cage, 128.9), (cage, 128.2), (_chain("5_2_tube_cage"), 128.0)])
@@ -131,8 +132,24 @@ def test_two_branches_that_meet_at_one_width_merge_there():
     assert second["event"] == {"kind": "merged", "w_over_L": 0.002, "detail": "with other"}
     assert [p["in_fit"] for p in second["points"]] == [True, False, False]
     assert second["epsilon_thin"] is None and r["ground"] == 0
+    assert second["partial"]["epsilon_thin"] is None       # one point before the merger
 
 
 def test_bad_ladders_are_refused():
     with pytest.raises(InvalidParameter):
         follow_state("3_1", _circle_cover(60), widths=(0.002, 0.002))
+
+
+def test_a_branch_that_jumped_into_another_does_not_make_that_one_a_merger():
+    """6_1's case: state 0 jumps into the cage that state 1 follows continuously; state 1 keeps
+    its own branch (and limit), state 0 ends."""
+    cage, other = _chain("4_1_tube_cage"), _chain("4_1_tube_other")
+    script = [(other, 128.1), (cage, 127.0), (cage, 126.5),       # state 0: jumps at 0.002
+              (cage, 128.9), (cage, 127.0), (cage, 126.5)]        # state 1: the cage
+    runner, _ = _scripted(script)
+    r = follow_states("4_1", [{"coords": other, "tag": "other"}, {"coords": cage, "tag": "cage"}],
+                      widths=(0.004, 0.002, 0.001), beads=150, measure_k=False, runner=runner)
+    first, second = r["branches"]
+    assert first["event"]["kind"] == "jumped" and first["epsilon_thin"] is None
+    assert second["event"] is None and second["epsilon_thin"] is not None
+    assert r["ground"] == 1

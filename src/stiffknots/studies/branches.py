@@ -29,7 +29,11 @@ distinct states lie ≥ 0.05 L apart). What happens on the way is recorded as **
   :data:`~stiffknots.analysis.identity.SAME_STATE_DISTANCE`, ε within 0.1 %): the
   higher-ranked one's points from there are not fitted (they are the other's).
 
-``event`` is the event that ended the fit (a jump or a merger), or None.
+``event`` is the event that ended the fit (a jump or a merger), or None. A branch with such an
+event has no limit of its own at w = 0 (``epsilon_thin`` None: the state folded into another
+or became another's); what its points before the event extrapolate to is kept as
+``partial``, for information. Only a branch that reaches the thinnest width can be the
+thin-limit ground state.
 
 Each branch's points are corrected for the discretisation (``eps = eps_N (1 + k/N^2)``, ``k``
 measured on the branch's thinnest fitted point relaxed again at 2 N, or the polygon rule
@@ -229,11 +233,15 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
             say(f"{name} {tag}: discretisation at w/L = {wl_k:g}: ε_{n} = {e1:.5f}, "
                 f"ε_{n2} = {e2:.5f}: k = {k_meas:.3f} (polygon rule ε/6 = {k_rule:.3f})")
     fit, eps_thin, err = correct_and_fit(points, n, disc)
+    partial = None
+    if event is not None:   # the state ended on the ladder: no limit of its own at w = 0
+        partial = {"epsilon_thin": eps_thin, "error": err, "fit": fit}
+        fit = eps_thin = err = None
     struct = structure_value(points[last]["label"], points[last]["multiplicity"])
     if struct is not None and eps_thin is not None:
         struct["difference"] = eps_thin - struct["epsilon"]
         struct["in_error_bars"] = abs(struct["difference"]) / err if err else None
-    return {"knot": name, "tag": tag,
+    return {"partial": partial, "knot": name, "tag": tag,
             "start": {"shape": s_name, "label": s_label, "multiplicity": s_mult,
                       "structure": s_struct},
             "shape": s_name, "points": points, "event": event, "events": events,
@@ -251,8 +259,9 @@ def follow_states(knot: Any, states: Sequence[dict], **kw: Any) -> dict[str, Any
 
     Returns ``{"knot", "branches": [follow_state results, in the given order], "ground"}``;
     ``ground`` is the index of the branch with the lowest ``epsilon_thin`` (None when no
-    branch has one). A branch that merged into an earlier one (lower index) at some width
-    gets that event (if it had none before) and stops being fitted from there.
+    branch has one). A branch that merged into an earlier one (lower index, still in its own
+    state there) at some width gets that event (if it had none before), stops being fitted
+    from there and has no limit of its own.
     """
     from stiffknots.analysis.identity import SAME_STATE_DISTANCE, shape_distance
 
@@ -264,6 +273,8 @@ def follow_states(knot: Any, states: Sequence[dict], **kw: Any) -> dict[str, Any
             for pa, pb, xa, xb in zip(a["points"], b["points"], a["chains"], b["chains"],
                                       strict=False):
                 if b["event"] is not None and pb["w_over_L"] < b["event"]["w_over_L"]:
+                    break
+                if not pa["in_fit"]:      # a has left its state there (a jump): not a merger
                     break
                 if abs(pa["epsilon_raw"] - pb["epsilon_raw"]) <= MERGE_REL * pa["epsilon_raw"] \
                         and shape_distance(xa, xb) <= SAME_STATE_DISTANCE:
@@ -280,12 +291,15 @@ def follow_states(knot: Any, states: Sequence[dict], **kw: Any) -> dict[str, Any
 
 
 def _refit(b: dict) -> None:
-    """Fit a branch again with only its points before its event."""
+    """A branch that merged: its points from the merger on are the other branch's; what its
+    points before extrapolate to is kept as ``partial``, and it has no limit of its own."""
     w_event = b["event"]["w_over_L"]
     for p in b["points"]:
         p["in_fit"] = p["w_over_L"] > w_event
     fit, eps, err = correct_and_fit(b["points"], b["parameters"]["beads"], b["discretisation"])
-    b.update(fit=fit, epsilon_thin=eps, error=err)
+    b.update(partial={"epsilon_thin": eps, "error": err, "fit": fit}, fit=None,
+             epsilon_thin=None, error=None)
+    eps = err = None
     if b["structure_route"] is not None:
         s = b["structure_route"]
         s["difference"] = None if eps is None else eps - s["epsilon"]
