@@ -142,6 +142,7 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
     from stiffknots.analysis.identity import shape_distance
     from stiffknots.chain import Chain
     from stiffknots.knots.catalogue import Knot, get_knot
+    from stiffknots.knots.resample import ResampleError, minimal_resample_beads
     from stiffknots.measures import min_segment_distance
     from stiffknots.problems.closed_plan import beads_for_knot
     from stiffknots.problems.relax import Relax
@@ -168,10 +169,26 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
     events: list[dict] = []
     key = s_key
     prev = x0
+    beads_note = None
     for wl in ws:
+        try:
+            p = Relax(Chain(prev, closed=True), n, moves, replicas, seed, exclusion="tube",
+                      w_over_L=wl, knot=name)
+        except ResampleError:
+            if points or beads is not None:
+                raise
+            # a start whose strands touch (a circular braid of 3) cannot be resampled to
+            # fewer beads than length / (its distance between non-neighbouring parts): the
+            # ladder takes the fewest beads that keep the knot type certified
+            need = minimal_resample_beads(x0, start=n, limit=V.MAX_BEADS)
+            beads_note = (f"N = {need}, not the rule's {n}: the fewest beads the start can be "
+                          "resampled to with its knot type certified")
+            say(f"{name} {tag}: {beads_note}")
+            n = need
+            moves = V.moves(max(200_000, round(relax_factor * default_moves(n))))
+            p = Relax(Chain(prev, closed=True), n, moves, replicas, seed, exclusion="tube",
+                      w_over_L=wl, knot=name)
         width = Width.tube(n, w_over_L=wl)
-        p = Relax(Chain(prev, closed=True), n, moves, replicas, seed, exclusion="tube",
-                  w_over_L=wl, knot=name)
         r = run(p, f"{name} {tag}, w/L = {wl:g}")
         if r.interrupted:
             raise KeyboardInterrupt
@@ -248,7 +265,8 @@ def follow_state(knot: Any, coords: np.ndarray, *, widths: Sequence[float] = LAD
             "epsilon_thin": eps_thin,
             "error": err, "fit": fit, "discretisation": disc, "structure_route": struct,
             "chains": chains, "version": __version__, "seed": seed,
-            "parameters": {"widths": ws, "beads": n, "rel_error": rel_error,
+            "parameters": {"widths": ws, "beads": n, "beads_note": beads_note,
+                           "rel_error": rel_error,
                            "relax_moves": moves, "replicas": replicas, "exclusion": "tube"},
             "wall_time": time.time() - t0}
 
