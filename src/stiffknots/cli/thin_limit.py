@@ -47,9 +47,10 @@ def thin_limit(
     """The thin-limit ground state of a knot (§V A): its states at the atlas width (tube model,
     w/L = 0.0047, three independent searches) sorted into a census, every state followed down
     to w/L = 0.00025 by continuation and extrapolated to its own ε* at w/L → 0 with an error
-    bar, the structure route's w = 0 value beside each state whose class has one (CB(i), the
-    80, the 4-fold cage). Says which state is the ground in the thin limit, by how much and
-    how sure, and where the branches cross. See docs/thin-limit.md."""
+    bar; beside it the structure route: the state's own structure graph solved at w = 0 (or
+    the named CB(i), 80 or 4-fold cage where the graph has a line-braid). Says which state is
+    the ground in the thin limit, by how much and how sure, and where the branches cross.
+    See docs/thin-limit.md."""
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.problems import validate as V
     from stiffknots.problems.base import solve
