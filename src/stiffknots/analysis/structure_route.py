@@ -6,8 +6,9 @@ Gallotti & Pierre-Louis, "Stiff knots", PRE 2007, §V B: as w → 0 a knot's sha
 (eq. (17)) is minimised at fixed length. :mod:`stiffknots.theory.structures` solves that
 problem for a :class:`~stiffknots.theory.structures.StructureProblem`; the named structures
 (CB(i), the 80, the 4-fold cage) are written by hand. :func:`structure_problem` writes the
-problem of any chain whose structure graph (:func:`~stiffknots.analysis.structure
-.analyse_structure`) has point-braids and multiple points joined by single strands:
+problem of any chain whose structure graph
+(:func:`~stiffknots.analysis.structure.analyse_structure`) has point-braids and multiple
+points joined by single strands:
 
 * every point-braid and multiple point is a junction, placed at the mean of its beads;
 * a point-braid has one unit *direction* (the bunch's axis, from the tangents of its strands);

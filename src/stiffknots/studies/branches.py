@@ -2,8 +2,9 @@
 
 Gallotti & Pierre-Louis, "Stiff knots", PRE 2007, §V A: the thin limit of a knot is
 ``eps* = lim_{w -> 0} eps*_w``. The ground state can change with the width, so the limit is
-the lowest of its *states'* limits: each state of the knot's census (:mod:`stiffknots.analysis
-.census`) is followed down a ladder of ``w/L`` by continuation and extrapolated on its own.
+the lowest of its *states'* limits: each state of the knot's census
+(:mod:`stiffknots.analysis.census`) is followed down a ladder of ``w/L`` by continuation and
+extrapolated on its own.
 
 At each width of the ladder the previous point's chain is resampled to the N of the ladder
 (the N rule at its widest width, :func:`~stiffknots.problems.closed_plan.beads_for_knot`;
