@@ -215,8 +215,8 @@ def test_help_texts_are_reflowed_paragraphs():
     rc, out, err = run("--help")
     assert rc == 0
     # thin-limit's docstring was wrapped at 96 columns: each of its lines ended mid-sentence
-    assert "each point annealed or continued" in " ".join(out.split())
-    assert "previous width and polished, corrected" in " ".join(out.split())
+    assert "sorted into a census, every state followed down to w/L" in " ".join(out.split())
+    assert "state's own structure graph solved at w = 0" in " ".join(out.split())
 
 
 @pytest.mark.slow
