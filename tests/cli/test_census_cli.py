@@ -69,6 +69,7 @@ def test_census_is_taken_stored_and_read_back(db):
     assert rc == 0 and "no census of 7_2 is stored" in out
 
 
+@pytest.mark.slow  # the same refusals run in tests/cli/test_probe.py's matrix
 def test_census_refuses_what_it_cannot_do_in_one_line(db, tmp_path):
     for args, words in [
             (("census", "--db", str(tmp_path / "none.db")), "no results database"),

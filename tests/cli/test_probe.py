@@ -449,7 +449,7 @@ CASES = [
     ("thin-limit 3_1 --budget huge", r"--budget must be one of small, default, got 'huge'", True),
     ("thin-limit 3_1 --seed -1", r"--seed must be an integer in \[0, ", True),
     ("thin-limit 3_1 --seed abc", r"Invalid value for '--seed'", False),
-    ("thin-limit 3_1 --states 0", r"--states must be an integer in \[1, 1,000\], got 0", True),
+    ("thin-limit 3_1 --states 0", r"--states must be an integer in \[1, 1,000\], got 0", False),
     ("thin-limit 3_1 --states x", r"Invalid value for '--states'", False),
     # --- census -------------------------------------------------------------------------------
     ("census --db {out}", r"no results database at .*out", True),
