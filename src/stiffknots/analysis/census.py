@@ -32,6 +32,7 @@ from typing import Any
 
 from stiffknots._json import to_plain
 from stiffknots.analysis.identity import DEFAULT_POINTS, SAME_STATE_DISTANCE, shape_distance
+from stiffknots.analysis.states import state_name
 
 __all__ = ["DEFAULT_WINDOW", "CensusState", "Census", "census"]
 
@@ -80,7 +81,7 @@ class CensusState:
     @property
     def name(self) -> str:
         """``"CB(i=2)"``, ``"4C"``, ``"80"`` or ``"other"``."""
-        return f"CB(i={self.multiplicity})" if self.label == "CB" else self.label
+        return state_name(self.label, self.multiplicity)
 
     def to_dict(self) -> dict:
         return {"name": self.name, "shape": self.label, "multiplicity": self.multiplicity,

@@ -26,7 +26,13 @@ import numpy as np
 from stiffknots._json import to_plain
 from stiffknots.analysis.shapes import LABELS, Shape, classify
 
-__all__ = ["StateGroup", "StateGroups", "group_states"]
+__all__ = ["StateGroup", "StateGroups", "group_states", "state_name"]
+
+
+def state_name(label: str, multiplicity: int | None) -> str:
+    """A state's name from its shape class: ``"CB(i=2)"``, ``"4C"``, ``"80"`` or
+    ``"other"``."""
+    return f"CB(i={multiplicity})" if label == "CB" else label
 
 
 @dataclass
@@ -67,7 +73,7 @@ class StateGroup:
     @property
     def name(self) -> str:
         """``"CB(i=2)"``, ``"4C"``, ``"80"`` or ``"other"``."""
-        return f"CB(i={self.multiplicity})" if self.label == "CB" else self.label
+        return state_name(self.label, self.multiplicity)
 
     def to_dict(self) -> dict:
         return {"name": self.name, "label": self.label, "multiplicity": self.multiplicity,

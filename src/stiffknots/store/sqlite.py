@@ -915,14 +915,7 @@ class Store:
         none in a version-1 database read as it is."""
         if self._version < 2:
             return []
-        clauses, params = [], []
-        for col, value in (("knot", knot), ("exclusion", exclusion), ("audit", audit)):
-            if value is None:
-                continue
-            values = list(value) if isinstance(value, list | tuple) else [value]
-            clauses.append(f"{col} IN ({', '.join('?' * len(values))})")
-            params.extend(values)
-        where = (" WHERE " + " AND ".join(clauses)) if clauses else ""
+        where, params = _in_where((("knot", knot), ("exclusion", exclusion), ("audit", audit)))
         out = []
         for r in self._query(f"SELECT {', '.join(AUDIT_COLUMNS)} FROM audits{where}", params):
             d = dict(zip(AUDIT_COLUMNS, r, strict=True))
@@ -972,14 +965,7 @@ class Store:
         as it is."""
         if self._version < 3:
             return []
-        clauses, params = [], []
-        for col, value in (("knot", knot), ("exclusion", exclusion)):
-            if value is None:
-                continue
-            values = list(value) if isinstance(value, list | tuple) else [value]
-            clauses.append(f"{col} IN ({', '.join('?' * len(values))})")
-            params.extend(values)
-        where = (" WHERE " + " AND ".join(clauses)) if clauses else ""
+        where, params = _in_where((("knot", knot), ("exclusion", exclusion)))
         out = []
         for r in self._query(f"SELECT {', '.join(CENSUS_COLUMNS)} FROM census{where}", params):
             d = dict(zip(CENSUS_COLUMNS, r, strict=True))
@@ -991,6 +977,19 @@ class Store:
         out.sort(key=lambda d: (knot_sort_key(d["knot"]), d["exclusion"], d["beads"],
                                 float(d["thickness_key"])))
         return out
+
+
+def _in_where(pairs: Iterable[tuple[str, Any]]) -> tuple[str, list]:
+    """``WHERE col IN (...) AND ...`` for the (column, value or list of values) pairs whose
+    value is not None, and its parameters (the audits' and the census's filters)."""
+    clauses, params = [], []
+    for col, value in pairs:
+        if value is None:
+            continue
+        values = list(value) if isinstance(value, list | tuple) else [value]
+        clauses.append(f"{col} IN ({', '.join('?' * len(values))})")
+        params.extend(values)
+    return (" WHERE " + " AND ".join(clauses)) if clauses else "", params
 
 
 def _eps_by_search(members: Iterable[Mapping[str, Any]]) -> dict[str, float]:

@@ -84,13 +84,14 @@ def _read(x: np.ndarray, w: float) -> tuple[str, str | None, int | None, str]:
     import warnings
 
     from stiffknots.analysis import analyse_structure, classify
+    from stiffknots.analysis.states import state_name
 
     d = max(float(w), CLASSIFY_D_MIN)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # the bead-rule warning: a tube chain, on purpose
         c = classify(x, True, d=d)
         structure = analyse_structure(x, True, d=d).name
-    name = f"CB(i={c.multiplicity})" if c.label == "CB" else c.label
+    name = state_name(c.label, c.multiplicity)
     return name, c.label, c.multiplicity, structure
 
 
@@ -318,8 +319,5 @@ def _refit(b: dict) -> None:
     fit, eps, err = correct_and_fit(b["points"], b["parameters"]["beads"], b["discretisation"])
     b.update(partial={"epsilon_thin": eps, "error": err, "fit": fit}, fit=None,
              epsilon_thin=None, error=None)
-    eps = err = None
-    if b["structure_route"] is not None:
-        s = b["structure_route"]
-        s["difference"] = None if eps is None else eps - s["epsilon"]
-        s["in_error_bars"] = abs(s["difference"]) / err if eps is not None and err else None
+    if b["structure_route"] is not None:   # no limit of its own: nothing to compare
+        b["structure_route"].update(difference=None, in_error_bars=None)
