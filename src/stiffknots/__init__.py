@@ -18,6 +18,35 @@ Names are imported lazily (numba compiles on first use, and nothing heavy loads 
 
 from stiffknots._version import __version__
 
+
+def _numpy_threads_without_sigterm() -> None:
+    """Load numpy with SIGTERM blocked in the importing (main) thread.
+
+    numpy's OpenBLAS starts its pool of threads when it loads, and a thread starts with its
+    creator's signal mask. Its threads then never take a process-directed SIGTERM: the kernel
+    gives it to the main thread, which holds it back while topoly runs
+    (:func:`stiffknots.knots.identify._keep_sigterm`) and takes it after. Loaded otherwise,
+    an OpenBLAS thread took a ``kill PID`` sent during a knot check, topoly's own handler
+    swallowed it, and the run went on (5 of 5 tries). numpy loaded before stiffknots keeps
+    its threads as they are.
+    """
+    import signal
+    import sys
+    import threading
+
+    if "numpy" in sys.modules or not hasattr(signal, "pthread_sigmask"):
+        return
+    if threading.current_thread() is not threading.main_thread():
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    try:
+        import numpy  # noqa: F401
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+_numpy_threads_without_sigterm()
+
 _LAZY = {
     # problems (§VII–IX)
     "anneal": "stiffknots.problems.closed",

@@ -235,16 +235,19 @@ def _quiet():
 def _keep_sigterm():
     """Give SIGTERM its disposition back after a topoly call.
 
-    topoly's compiled HOMFLY-PT code installs a C handler for SIGTERM (``sigaction``) and
-    leaves it: afterwards ``kill PID`` no longer stopped a run (the handler swallows the
-    signal), while Python still reported the default. The disposition Python knows is
-    reinstalled after the call (in the main thread, the only one that may set handlers; in
-    other threads :func:`homfly_code` runs topoly in a forked child anyway). During the call
-    SIGTERM is blocked, so that one sent then waits and reaches that disposition afterwards
-    instead of topoly's handler (a ``kill PID`` during a knot check was lost: the command
-    line's stop, :mod:`stiffknots.cli.main`, never came). The mask is the calling thread's:
-    it holds the signal back because topoly runs here only while this is the process's one
-    thread (:func:`homfly_code` forks otherwise).
+    topoly's HOMFLY-PT library (``liblmpoly``) installs a C handler for SIGTERM (``signal``,
+    its ``handle_sigterm``, which sets a flag of its own and reinstalls itself) and leaves it:
+    afterwards ``kill PID`` no longer stopped a run (the handler swallows the signal), while
+    Python still reported the default. The disposition Python knows is reinstalled after the
+    call (in the main thread, the only one that may set handlers; in other threads
+    :func:`homfly_code` runs topoly in a forked child anyway). During the call SIGTERM is
+    blocked, so that one sent then waits and reaches that disposition afterwards instead of
+    topoly's handler (a ``kill PID`` during a knot check was lost: the command line's stop,
+    :mod:`stiffknots.cli.main`, never came). The mask is the calling thread's: it holds the
+    signal back because topoly runs here only while this is the process's one Python thread
+    (:func:`homfly_code` forks otherwise) and the threads numpy's OpenBLAS starts block SIGTERM
+    when numpy loads with stiffknots (``stiffknots._numpy_threads_without_sigterm``; numpy
+    loaded before stiffknots keeps threads that may take it during the call).
     """
     main = threading.current_thread() is threading.main_thread()
     saved = signal.getsignal(signal.SIGTERM) if main else None
