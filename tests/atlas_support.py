@@ -70,6 +70,32 @@ def _wobbly_trefoil(n: int = 150) -> np.ndarray:
     return synthetic.resample_closed(np.column_stack([x, y, z]), n)
 
 
+def synthetic_thin(chain) -> dict:
+    """A knot's thin stage in the page schema: the cage (state 0, the ground at the census's
+    width) and an ``other`` state whose branch crosses below it near w/L = 0.002 and is the
+    thin-limit ground (both routes agreeing); a third state that merged (no limit)."""
+    ladder = (0.004, 0.002, 0.001, 0.0005)
+
+    def pts(eps, out_from=None):
+        return [{"w_over_L": w, "epsilon": e, "in_fit": out_from is None or w > out_from}
+                for w, e in zip(ladder, eps, strict=True)]
+
+    return {"w_over_L": 0.0047, "budget": "small", "seed": 0, "ground": 1, "crossing": 0.002,
+            "states": [
+                {"name": "4C", "epsilon": 129.31, "epsilon_thin": 126.41, "error": 0.18,
+                 "structure_epsilon": 126.4725, "structure_name": "2 point-braids",
+                 "agree": True, "event": None,
+                 "points": pts((128.77, 127.48, 126.85, 126.54))},
+                {"name": "other", "epsilon": 129.60, "epsilon_thin": 126.03, "error": 0.18,
+                 "structure_epsilon": 126.1586,
+                 "structure_name": "point-braid + 2 double points", "agree": True,
+                 "event": None, "points": pts((128.9, 126.76, 126.24, 126.02))},
+                {"name": "80", "epsilon": 140.2, "epsilon_thin": None, "error": None,
+                 "structure_epsilon": None, "structure_name": None, "agree": None,
+                 "event": "merged", "points": pts((139.0, 137.5, 136.0, 135.1), 0.002)}],
+            "chain": {"coords": chain, "w_over_L": 0.0005}}
+
+
 def synthetic_knots(n_beads: int = 150) -> list[dict]:
     """Six knots in the input schema of :func:`stiffknots.report.atlas.write_atlas`.
 
@@ -92,6 +118,7 @@ def synthetic_knots(n_beads: int = 150) -> list[dict]:
                                        radius=TUBE_RADIUS),
                       "metastable": []}}},
         {"name": "4_1", "crossing_number": 4, "n": 2, "i": 3, "families": ["4C"],
+         "thin": synthetic_thin(synthetic.four_cage(n)),
          "models": {
              "bead": {"width": BEAD_WIDTH, "replicas": 8,
                       "ground": {**_state(cage, "4C", count=5, eps_mean_shift=0.4),

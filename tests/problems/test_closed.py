@@ -83,8 +83,8 @@ def test_a_tube_route_replica_ends_bead_admissible_polished_and_verified():
     assert r.min_segment_distance < d - 0.1
 
 
-@pytest.mark.parametrize("kind", ["langevin",
-                                  pytest.param("tempering", marks=pytest.mark.slow)])
+@pytest.mark.slow  # 40 s each (three rounds of 7_4)
+@pytest.mark.parametrize("kind", ["langevin", "tempering"])
 def test_schedules_without_hops_run_later_rounds_as_new_searches(kind):
     # a schedule that cannot continue a search (no basin hops) fills the rounds after the
     # fresh ones with new searches (it once failed there on zip(legs, parents)); 7_4 on a

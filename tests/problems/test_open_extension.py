@@ -154,7 +154,8 @@ def test_excess_length_for_force_inverts_the_tension_law():
         excess_length_for_force(20.0, -1.0)
 
 
-def test_cli_open_and_tightest_json(capsys):
+@pytest.mark.slow  # 48 s (compiles the open and tightest kernels); tests/cli/test_probe.py
+def test_cli_open_and_tightest_json(capsys):  # runs both commands in the default suite
     from stiffknots.cli import app
 
     app(["open", "3_1", "--excess-length", "30", "--moves", "200000", "--replicas", "1",

@@ -26,7 +26,7 @@ def test_schema_version_mismatch_is_a_clear_error(tmp_path):
     con.execute("UPDATE meta SET value = '99' WHERE key = 'schema_version'")
     con.commit()
     con.close()
-    with pytest.raises(SchemaVersionError, match=r"schema version 99.*reads version 3.*Upgrade"):
+    with pytest.raises(SchemaVersionError, match=r"schema version 99.*reads version 4.*Upgrade"):
         Store(path)
     con = sqlite3.connect(path)
     con.execute("UPDATE meta SET value = '0' WHERE key = 'schema_version'")

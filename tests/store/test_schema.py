@@ -54,6 +54,7 @@ def _as_version_1(path):
     con = sqlite3.connect(path)
     con.execute("DROP TABLE audits")
     con.execute("DROP TABLE census")
+    con.execute("DROP TABLE thin")
     con.execute("UPDATE meta SET value = '1' WHERE key = 'schema_version'")
     con.commit()
     con.close()
@@ -68,13 +69,13 @@ def test_a_version_1_database_is_read_as_it_is_and_migrated_when_written(tmp_pat
         assert s.meta()["schema_version"] == "1"
         assert len(s) == 1 and s.audits() == []
     with Store(path) as s:  # opened for writing: migrated, its replicas kept
-        assert s.meta()["schema_version"] == str(SCHEMA_VERSION) == "3"
-        assert "version 1 → 3" in s.meta()["migrated"]
+        assert s.meta()["schema_version"] == str(SCHEMA_VERSION) == "4"
+        assert "version 1 → 4" in s.meta()["migrated"]
         assert len(s) == 1 and s.audits() == []
     con = sqlite3.connect(path)
     tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
     con.close()
-    assert {"audits", "census"} <= tables
+    assert {"audits", "census", "thin"} <= tables
 
 
 def test_audit_rows_round_trip_and_replace_their_key(tmp_path):

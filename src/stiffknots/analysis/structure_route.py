@@ -42,7 +42,7 @@ measures the smallest distance between points of two different arcs farther than
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -77,6 +77,10 @@ class ChainStructure:
         minimum; more for a saddle (the start was too far from the structure's minimum).
     details : dict
         Resolutions, energies per level, seconds.
+    curves : list of dict
+        The solution at the finest resolution, arc by arc: ``points`` (K × 3, L = 1) and
+        ``multiplicity`` (strands the arc stands for: a line-braid's or a multiple point's
+        shared arcs count more than once).
     """
 
     epsilon: float
@@ -88,6 +92,7 @@ class ChainStructure:
     keeps_knot: bool
     negative_modes: int
     details: dict
+    curves: list = field(default_factory=list)
 
     @property
     def minimum(self) -> bool:
@@ -286,4 +291,7 @@ def solve_chain(coords: Any, d: float, *, Ks: tuple[int, ...] = (16, 32, 64, 128
         keeps_knot=bool(dmin >= touch),
         negative_modes=int((res.stability or {}).get("negative", 0)),
         details={"Ks": list(res.Ks), "epsilon_K": [float(e) for e in res.epsilons],
-                 "seconds": float(res.seconds), "tension": float(lv.tension)})
+                 "seconds": float(res.seconds), "tension": float(lv.tension)},
+        curves=[{"points": np.asarray(lv.positions(p), dtype=float),
+                 "multiplicity": int(prob.arcs[p].multiplicity)}
+                for p in range(len(prob.arcs))])

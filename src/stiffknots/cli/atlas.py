@@ -241,6 +241,18 @@ def atlas(
                          "(a sweep stopped part-way; its knots without results get a row "
                          "that says so). The same command without --stored runs the rest.")
     ] = False,
+    thin: Annotated[bool, typer.Option(
+        "--thin", help="After the sweep, follow every state of each knot's tube census to "
+                       "w = 0 (branches extrapolated and the structure route; a job per "
+                       "knot on Dask, resumable): the pages and --json gain the thin-limit "
+                       "ground (ε*). Needs tube in --models.")] = False,
+    thin_budget: Annotated[str, typer.Option(
+        help="The thin stage's ladder: small (w/L 0.004 … 0.0005, 4 widths, ≈ 1 CPU min a "
+             "state) or default (0.004 … 0.00025, 9 widths, the polygon constant measured: "
+             "≈ 3× longer, the errors smaller).")] = "small",
+    thin_states: Annotated[int | None, typer.Option(
+        help="Follow only the N lowest states of each census (default: every state within "
+             "15 % of the lowest).", parser=count)] = None,
     json_: JsonOpt = False,
 ) -> None:
     """The atlas: ground and metastable states of every prime knot through K crossings
@@ -271,6 +283,18 @@ def atlas(
     V.seed(seed)
     if max_replicas is not None:  # None: the budget's (run_sweep)
         V.integer("max_replicas", max_replicas, bud.replicas, V.MAX_REPLICAS)
+    if thin:
+        choice("--thin-budget", thin_budget, ("small", "default"))
+        if "tube" not in [m.exclusion for m in mods]:
+            raise UserError("--thin follows the tube model's states to w = 0: add tube to "
+                            "--models")
+        if stored:
+            raise UserError("--thin runs the thin stage and --stored runs nothing: drop one "
+                            "(the pages show a stored thin stage either way)")
+        if thin_states is not None:
+            V.integer("thin_states", thin_states, 1, 1000)
+    elif thin_states is not None or thin_budget != "small":
+        raise UserError("--thin-budget and --thin-states set the thin stage: add --thin")
     scheduler = cluster_options(scheduler, workers)
     names = resolve_knots(knot_list, max_crossings)
     from pathlib import Path
@@ -283,7 +307,9 @@ def atlas(
     with SweepProgress() as bar:  # on stderr, --json too: stdout holds the JSON alone
         d = run_atlas(names, mods, bud, db=db, out=out_dir, seed=seed, scheduler=scheduler,
                       workers=workers, max_replicas=max_replicas, listener=bar,
-                      command=command, run=not stored)
+                      command=command, run=not stored,
+                      thin=thin_budget if thin else None, thin_states=thin_states,
+                      thin_listener=ThinLines())
     sw = d["sweep"]
     n_stored = sw["skipped"] + sw["ran"]
     if sw["interrupted"]:
@@ -291,6 +317,13 @@ def atlas(
             dump(d)
         raise Interrupted(f"interrupted: {n_stored} of {sw['jobs']} jobs are stored in {db}; "
                           "run the same command to resume")
+    th = d.get("thin")
+    if th is not None and th["interrupted"]:
+        if json_:
+            dump(d)
+        raise Interrupted(f"interrupted in the thin stage: {len(th['skipped']) + len(th['ran'])}"
+                          f" of {len(th['jobs']) + len(th['skipped'])} knots are stored in "
+                          f"{db}; run the same command to resume")
     if json_:
         dump(d)
     else:
@@ -302,6 +335,39 @@ def atlas(
         err.print(f"{len(sw['failed'])} of {sw['jobs']} jobs failed (not stored); the atlas "
                   "shows the others", highlight=False)
         raise typer.Exit(1)
+    if th is not None and th["failed"]:
+        err.print(f"{len(th['failed'])} knots of the thin stage failed (not stored); the atlas "
+                  "shows the others", highlight=False)
+        raise typer.Exit(1)
+
+
+class ThinLines:
+    """The thin stage's progress, line by line on stderr (each worker's relaxations and each
+    knot's verdict as it is stored)."""
+
+    def started(self, res) -> None:
+        if res.jobs or res.skipped:
+            err.print(f"thin stage ({res.budget}): {len(res.jobs)} knots to follow to w = 0, "
+                      f"{len(res.skipped)} stored before", highlight=False, markup=False)
+        for m in res.missing:
+            err.print(f"thin stage: {m['knot']}: {m['why']}", highlight=False, markup=False)
+
+    def line(self, knot: str, text: str) -> None:
+        err.print(f"  {text}", highlight=False, markup=False, soft_wrap=True)
+
+    def finished(self, knot: str, rows, error: str | None) -> None:
+        if error is not None:
+            err.print(f"thin stage: {knot} failed: {error}", highlight=False, markup=False,
+                      soft_wrap=True)
+            return
+        g = next((r for r in rows if r["ground"]), None)
+        if g is None:
+            err.print(f"thin stage: {knot} stored: no state reached w = 0 in its own state",
+                      highlight=False, markup=False)
+        else:
+            e = f" ± {g['error']:.2g}" if g["error"] is not None else ""
+            err.print(f"thin stage: {knot} stored: thin-limit ground {g['name']}, ε* = "
+                      f"{g['epsilon_thin']:.4f}{e}", highlight=False, markup=False)
 
 
 def _print(d: dict, mods) -> None:
@@ -372,4 +438,18 @@ def _print(d: dict, mods) -> None:
               highlight=False)
     if sw["left"] and not sw["failed"]:
         out.print("the same command without --stored runs the jobs not run", highlight=False)
+    th = d.get("thin")
+    if th is not None:
+        out.print(f"thin stage ({th['budget']}): {len(th['ran'])} knots followed to w = 0 now, "
+                  f"{len(th['skipped'])} stored before ({th['wall_seconds']:.0f} s wall, "
+                  f"{th['cpu_seconds']:.0f} CPU s)", highlight=False)
+        for f in th["failed"]:
+            err.print(f"thin stage failed: {f['job']}: {f['error']}", highlight=False,
+                      markup=False, soft_wrap=True)
+    thins = [e for e in d["knots"] if e.get("epsilon_thin") is not None]
+    if thins:
+        out.print("thin-limit grounds (w → 0): " + "; ".join(
+            f"{e['name']} {e['thin_state']} {e['epsilon_thin']:.3f}"
+            + (f" ± {e['thin_error']:.2g}" if e["thin_error"] is not None else "")
+            for e in thins), highlight=False, markup=False, soft_wrap=True)
     out.print(f"atlas: {d['html']}\ndatabase: {d['db']}", highlight=False, markup=False)

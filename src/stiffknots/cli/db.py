@@ -134,6 +134,33 @@ def census(
                   f"replicas", highlight=False, markup=False)
 
 
+@db_app.command("thin")
+def thin(
+    ctx: typer.Context,
+    knot: Annotated[str, typer.Argument(help="Knot name: 3_1, 4_1, 5_2 ...")],
+    json_: JsonOpt = False,
+) -> None:
+    """A knot's stored thin stage: every state of its tube census followed to w = 0 (ε*
+    extrapolated, and by the structure route), and its thin-limit ground (stiffknots atlas
+    --thin computes it)."""
+    from stiffknots.cli.thin_table import print_thin
+    from stiffknots.knots.catalogue import get_knot
+    from stiffknots.store.thin import thin_knots
+
+    name = get_knot(knot).name
+    with _open(ctx) as store:
+        got = thin_knots(store, name)
+    if json_:
+        dump({"knot": name, "thin": got[0] if got else None})
+        return
+    if not got:
+        out.print(f"no thin stage of {name} is stored in {ctx.obj['db']}: run stiffknots atlas "
+                  f"--knots {name} --models tube --thin --db {ctx.obj['db']}", highlight=False,
+                  markup=False)
+        return
+    print_thin(got[0])
+
+
 @db_app.command("grounds")
 def grounds(
     ctx: typer.Context,

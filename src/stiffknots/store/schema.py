@@ -1,4 +1,4 @@
-"""Schema of the results database (SQLite), version 3.
+"""Schema of the results database (SQLite), version 4.
 
 One file (default ``results/stiffknots.db``; ``--db PATH``), journal mode WAL (readers never
 block the writer, a killed writer never leaves a half-written row), one row per annealed
@@ -135,25 +135,69 @@ params                 TEXT      the census's parameters (JSON: window, rel_tol,
                                  max_distance, points)
 =====================  ========  ==========================================================
 
+Table ``thin`` (version 4)
+--------------------------
+One row per state of a knot's census followed to w = 0 by the atlas's thin stage
+(:mod:`stiffknots.studies.thin_stage`, :func:`stiffknots.studies.thin_states.follow_census`). The
+states of one knot are followed in one job and written in one transaction, under the job's
+``run`` key (its knot and width, the census's states, budget, seed and version): a thin stage
+run again skips every run stored. Key: ``UNIQUE(run, state)``.
+
+=====================  ========  ==========================================================
+column                 type      meaning
+=====================  ========  ==========================================================
+id                     INTEGER   row id
+run                    TEXT      16 hex digits: the job's key
+created, version       TEXT      UTC time written; stiffknots version
+knot, exclusion,       …         the knot and the width its census was taken at (as in
+beads, thickness_key             ``replicas``)
+w_over_L               REAL      that width's w/L
+census                 TEXT      the census's parameters' hash (table ``census``)
+budget                 TEXT      ``small`` or ``default``
+                                 (:data:`stiffknots.studies.thin_states.BUDGETS`)
+seed                   INTEGER   seed of every relaxation
+state                  INTEGER   the state's rank in the census (0 = lowest at that width)
+name                   TEXT      its name (``CB(i=2)``, ``4C``, ``80``, ``other``)
+representative         INTEGER   ``replicas.id`` of the chain it was followed from
+epsilon                REAL      its ε at the census's width
+epsilon_thin           REAL      ε*_s extrapolated to w = 0 (NULL: the branch jumped or
+                                 merged: no limit of its own)
+error                  REAL      its error
+event                  TEXT      NULL, ``jumped`` or ``merged`` (what ended the fit)
+shape_thin             TEXT      its shape class at the thinnest width
+structure_epsilon      REAL      ε at w = 0 by the structure route (NULL: none)
+structure_error        REAL      its error
+structure_name         TEXT      the structure solved
+agree                  INTEGER   1 / 0: the two routes agree / do not; NULL: not compared
+ground                 INTEGER   1: this state is its knot's thin-limit ground (lowest
+                                 ``epsilon_thin`` of the run)
+details                TEXT      JSON: the points of the branch (w/L, N, ε), its events,
+                                 fit, discretisation and parameters, the structure route
+                                 (with the w = 0 curves), the run's margin and crossing
+chain                  BLOB      the thinnest chain still in the state: N × 3 float64
+beads_thin             INTEGER   its N (CHECK: length(chain) = 24 · beads_thin)
+cpu_seconds            REAL      CPU seconds of the knot's job (on every row of the run)
+=====================  ========  ==========================================================
+
 Table ``meta``: ``key``/``value`` text pairs (``schema_version``, ``created``,
 ``created_by``, and ``migrated`` once a database was migrated).
 
 Migrations: a database of an older version opened for writing is migrated in one transaction
-(:data:`MIGRATIONS`: version 1 → 2 adds ``audits``, 2 → 3 ``census``); opened read-only it
-is read as it is (:data:`READABLE`: a version-1 database has no audits, a version-2 one no
-census).
+(:data:`MIGRATIONS`: version 1 → 2 adds ``audits``, 2 → 3 ``census``, 3 → 4 ``thin``);
+opened read-only it is read as it is (:data:`READABLE`: a version-1 database has no audits, a
+version-2 one no census, a version-3 one no thin stage).
 """
 
 from __future__ import annotations
 
 __all__ = ["SCHEMA_VERSION", "READABLE", "MIGRATIONS", "APPLICATION_ID", "DDL", "COLUMNS",
            "ROW_COLUMNS", "ENSEMBLE_FIELDS", "AUDIT_COLUMNS", "CENSUS_COLUMNS",
-           "WIDTH_FIELDS"]
+           "THIN_COLUMNS", "WIDTH_FIELDS"]
 
 #: Version of the schema this code writes and reads.
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 #: The versions a read-only store reads as they are (no migration: it writes nothing).
-READABLE = (1, 2, 3)
+READABLE = (1, 2, 3, 4)
 
 #: ``PRAGMA application_id`` of a stiffknots results database (the bytes ``"SKNT"``).
 APPLICATION_ID = int.from_bytes(b"SKNT", "big")
@@ -274,8 +318,49 @@ CENSUS_COLUMNS = ("id", "census", "created", "version", "knot", "exclusion", "be
                   "multiplicity", "structure", "epsilon", "eps_max", "count", "searches",
                   "representative", "spread", "replicas", "params")
 
+_THIN = """
+CREATE TABLE IF NOT EXISTS thin (
+    id                   INTEGER PRIMARY KEY,
+    run                  TEXT    NOT NULL CHECK (length(run) = 16),
+    created              TEXT    NOT NULL,
+    version              TEXT    NOT NULL,
+    knot                 TEXT    NOT NULL,
+    exclusion            TEXT    NOT NULL CHECK (exclusion IN ('bead', 'tube')),
+    beads                INTEGER NOT NULL,
+    thickness_key        TEXT    NOT NULL,
+    w_over_L             REAL    NOT NULL,
+    census               TEXT    NOT NULL CHECK (length(census) = 16),
+    budget               TEXT    NOT NULL,
+    seed                 INTEGER NOT NULL CHECK (seed >= 0),
+    state                INTEGER NOT NULL CHECK (state >= 0),
+    name                 TEXT    NOT NULL,
+    representative       INTEGER NOT NULL,
+    epsilon              REAL    NOT NULL,
+    epsilon_thin         REAL,
+    error                REAL,
+    event                TEXT    CHECK (event IS NULL OR event IN ('jumped', 'merged')),
+    shape_thin           TEXT,
+    structure_epsilon    REAL,
+    structure_error      REAL,
+    structure_name       TEXT,
+    agree                INTEGER CHECK (agree IS NULL OR agree IN (0, 1)),
+    ground               INTEGER NOT NULL CHECK (ground IN (0, 1)),
+    details              TEXT    NOT NULL,
+    chain                BLOB    NOT NULL CHECK (length(chain) = 24 * beads_thin),
+    beads_thin           INTEGER NOT NULL CHECK (beads_thin >= 3),
+    cpu_seconds          REAL,
+    UNIQUE (run, state)
+)"""
+
+#: Every column of ``thin``, in table order.
+THIN_COLUMNS = ("id", "run", "created", "version", "knot", "exclusion", "beads",
+                "thickness_key", "w_over_L", "census", "budget", "seed", "state", "name",
+                "representative", "epsilon", "epsilon_thin", "error", "event", "shape_thin",
+                "structure_epsilon", "structure_error", "structure_name", "agree", "ground",
+                "details", "chain", "beads_thin", "cpu_seconds")
+
 #: version → the statements that migrate a database of that version to the next one.
-MIGRATIONS: dict[int, tuple[str, ...]] = {1: (_AUDITS,), 2: (_CENSUS,)}
+MIGRATIONS: dict[int, tuple[str, ...]] = {1: (_AUDITS,), 2: (_CENSUS,), 3: (_THIN,)}
 
 #: The statements that create an empty database (run in one transaction, idempotent).
 DDL: tuple[str, ...] = (
@@ -287,6 +372,7 @@ DDL: tuple[str, ...] = (
     _ENSEMBLES,
     _AUDITS,
     _CENSUS,
+    _THIN,
 )
 
 #: Every column of ``replicas``, in table order.

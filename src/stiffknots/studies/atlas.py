@@ -40,6 +40,7 @@ from stiffknots import sweeps
 from stiffknots._version import __version__
 from stiffknots.fileio import replaced_entries, write_json
 from stiffknots.store import Store
+from stiffknots.store.thin import thin_knots
 from stiffknots.sweeps import Budget, SweepListener, SweepResult
 from stiffknots.sweeps.audit import latest_audits
 from stiffknots.width import Width
@@ -174,6 +175,54 @@ def audit_of(audits: Mapping[tuple, Mapping], model: Width, st: Mapping) -> dict
 
     return audits.get((st["knot"], model.exclusion, model.beads,
                        thickness_key(model.thickness), st["settings_hash"]))
+
+
+def thin_json(t: Mapping | None) -> dict:
+    """The thin-stage fields of a knot's ``--json`` entry (:func:`stiffknots.store.thin.
+    thin_knots`' summary; all None when no thin run is stored): ``epsilon_thin``,
+    ``thin_error``, ``thin_structure``, ``thin_state`` (its name), ``thin_agree`` (the two
+    routes), ``thin_width`` (the census's w/L), ``thin_budget`` and ``thin_states`` (per
+    state: name, ε at the census's width, ε*, error, structure route, agree, event)."""
+    if t is None:
+        return {"epsilon_thin": None, "thin_error": None, "thin_structure": None,
+                "thin_state": None, "thin_agree": None, "thin_width": None,
+                "thin_budget": None, "thin_states": None}
+    return {"epsilon_thin": t["epsilon_thin"], "thin_error": t["thin_error"],
+            "thin_structure": t["thin_structure"], "thin_state": t["thin_shape"],
+            "thin_agree": t["agree"], "thin_width": t["w_over_L"],
+            "thin_budget": t["budget"],
+            "thin_states": [{k: s[k] for k in ("state", "name", "epsilon", "epsilon_thin",
+                                               "error", "structure_epsilon",
+                                               "structure_name", "agree", "event")}
+                            for s in t["states"]]}
+
+
+def thin_input(store: Store, t: Mapping | None) -> dict | None:
+    """A knot's thin stage in the input schema of the atlas pages (``thin``:
+    :mod:`stiffknots.report.atlas.schema`), with the thinnest chain of its thin-limit
+    ground for the 3D view; None when no thin run is stored."""
+    from stiffknots.store.thin import thin_chain
+
+    if t is None:
+        return None
+    g = t["ground"]
+    states = []
+    for s in t["states"]:
+        pts = [{"w_over_L": p["w_over_L"], "epsilon": p["epsilon"], "beads": p.get("beads"),
+                "in_fit": bool(p["in_fit"])} for p in s["details"]["points"]]
+        states.append({"name": s["name"], "state": s["state"], "epsilon": s["epsilon"],
+                       "epsilon_thin": s["epsilon_thin"], "error": s["error"],
+                       "structure_epsilon": s["structure_epsilon"],
+                       "structure_name": s["structure_name"], "agree": s["agree"],
+                       "event": s["event"], "ground": s["ground"], "points": pts})
+    chain = None
+    if g is not None:
+        p = g["details"]["points"][g["details"]["thin_point"]]
+        chain = {"coords": thin_chain(store, g["id"]), "w_over_L": p["w_over_L"],
+                 "beads": g["beads_thin"] if "beads_thin" in g else None}
+    return {"budget": t["budget"], "seed": t["seed"], "w_over_L": t["w_over_L"],
+            "ground": None if g is None else g["state"], "crossing": t["crossing"],
+            "margin": t["margin"], "states": states, "chain": chain}
 
 
 def atlas_input(store: Store, rec: Mapping, audits: Mapping[tuple, Mapping] | None = None
@@ -444,7 +493,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
               scheduler: str | None = None, workers: int | None = None,
               max_replicas: int | None = None, listener: SweepListener | None = None,
               thumbnails: bool = True, command: str | None = None,
-              run: bool = True) -> dict:
+              run: bool = True, thin: str | None = None, thin_states: int | None = None,
+              thin_listener: Any = None) -> dict:
     """Sweep ``knots`` × ``models`` on ``budget``, then write the atlas from the store.
 
     Parameters
@@ -470,6 +520,11 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
     run : bool
         False: run nothing, write the atlas of what is stored (``sweep["left"]``: the jobs
         not yet run; a knot without results gets a row and a page that say so).
+    thin : str, optional
+        Run the thin stage after the sweep with this budget (``small`` or ``default``,
+        :func:`stiffknots.studies.thin_stage.run_thin`): every state of each knot's tube census
+        followed to w = 0; ``thin_states`` limits the states per knot, ``thin_listener``
+        hears its progress. Thin results stored before are shown either way.
 
     Returns
     -------
@@ -494,10 +549,21 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
         result: dict[str, Any] = {"db": str(db), "html": None, "sweep": sweep.to_dict()}
         if sweep.interrupted:
             return result
+        if thin is not None and run:
+            from stiffknots.studies.thin_stage import run_thin
+
+            stage = run_thin(store, [k for k in knots if store.ensembles(
+                knot=k, exclusion="tube")], budget=thin, seed=seed, states=thin_states,
+                scheduler=scheduler, workers=workers, listener=thin_listener)
+            result["thin"] = stage.to_dict()
+            if stage.interrupted:
+                return result
         t0 = time.perf_counter()
         hashes = sweep.settings_hash
         recs = knot_records(store, knots, models, hashes)
-        entries = [json_entry(r, main) for r in recs]
+        thins = {t["knot"]: t for t in thin_knots(store, list(knots))}
+        entries = [{**json_entry(r, main), **thin_json(thins.get(r["knot"].name))}
+                   for r in recs]
         width = next(m.text for m in models if m.exclusion == main)
         grounds = {e["name"]: e["models"][main]["ground"] for e in entries}
         study = family_study(grounds, model=main, width=width)
@@ -512,7 +578,9 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
         # and no page of an earlier, larger atlas stays behind
         with replaced_entries(out, ATLAS_ENTRIES, "atlas") as stage:
             audits = latest_audits(store)
-            write_atlas(stage, [atlas_input(store, r, audits) for r in recs],
+            write_atlas(stage, [{**atlas_input(store, r, audits),
+                                 "thin": thin_input(store, thins.get(r["knot"].name))}
+                                for r in recs],
                         families=families_table(study), meta=meta, default_model=main,
                         thumbnails=thumbnails)
             fig = _plot_eps_n2(study, stage / "eps_vs_n2.png")

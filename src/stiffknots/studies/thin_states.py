@@ -59,6 +59,16 @@ def _crossing(lower: dict, finite: dict) -> float | None:
     return None
 
 
+def _thinned(points: Any, most: int = 200) -> Any:
+    """At most ``most`` of an arc's points, its two ends kept (for storage and drawing)."""
+    import numpy as np
+
+    q = np.asarray(points, dtype=float)
+    if len(q) <= most:
+        return q
+    return q[np.unique(np.linspace(0, len(q) - 1, most).round().astype(int))]
+
+
 def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
                     tag: str = "") -> dict[str, Any]:
     """The structure route (w = 0) of a followed state: the structure graph of its thinnest
@@ -69,8 +79,10 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
     4-fold cage) with a note saying why; else none, or the flagged solution, not compared.
 
     Returns ``{"epsilon", "error", "name", "method", "keeps_knot", "min_arc_distance",
-    "minimum", "negative_modes", "w_over_L", "note"}`` (``epsilon`` None when there is no
-    route; a route that is not a converged minimum or lets strands meet is not compared).
+    "minimum", "negative_modes", "curves", "w_over_L", "note"}`` (``epsilon`` None when there
+    is no route; a route that is not a converged minimum or lets strands meet is not compared;
+    ``curves``: the w = 0 solution's arcs, at most 200 points each, when the chain's graph was
+    solved).
     """
     from stiffknots.analysis.structure_route import StructureRouteError, solve_chain
     from stiffknots.studies.thin_limit import CLASSIFY_D_MIN, structure_value
@@ -81,7 +93,7 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
     p = pts[last]
     out: dict[str, Any] = {"epsilon": None, "error": None, "name": None, "method": None,
                            "keeps_knot": None, "min_arc_distance": None, "minimum": None,
-                           "negative_modes": None,
+                           "negative_modes": None, "curves": None,
                            "w_over_L": p["w_over_L"], "note": None}
     named = structure_value(p.get("label", branch["start"]["label"]),
                             p.get("multiplicity", branch["start"]["multiplicity"]))
@@ -119,7 +131,9 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
                method=f"the graph of the chain at w/L = {p['w_over_L']:g} solved at w = 0 "
                       f"({r.arcs} arcs, {r.junctions} junctions)",
                keeps_knot=r.keeps_knot, min_arc_distance=r.min_arc_distance,
-               minimum=r.minimum, negative_modes=r.negative_modes)
+               minimum=r.minimum, negative_modes=r.negative_modes,
+               curves=[{"points": _thinned(c["points"]).tolist(),
+                        "multiplicity": c["multiplicity"]} for c in r.curves])
     if problem is not None:
         out["note"] = f"{problem}: not compared"
     return out
@@ -189,13 +203,55 @@ def thin_limit_states(knot: Any, budget: str = "default", seed: int = 0, *,
         f"{100 * window:g} % of {c.ground.epsilon:.3f} from {len(items)} replicas: "
         + ", ".join(f"{s.name} {s.epsilon:.3f} ({s.searches} searches)" for s in c.states))
     chosen = c.states[:states] if states else c.states
+    starts = [{"coords": items[s.representative]["coords"], "name": s.name, "label": s.label,
+               "multiplicity": s.multiplicity, "structure": s.structure,
+               "epsilon": s.epsilon, "searches": s.searches} for s in chosen]
+    out = follow_census(k, starts, budget=budget, seed=seed, runner=run, say=say)
+    out["parameters"]["states"] = states
+    return {"knot": k.name, "budget": budget, "seed": seed, "version": __version__,
+            "census": {"epsilon": res.best.epsilon, "converged": bool(res.converged),
+                       "convergence": res.convergence, "width": width,
+                       "replicas": len(items), "window": window,
+                       "states": [s.to_dict() for s in c.states]},
+            **out, "wall_time": time.time() - t0}
+
+
+def follow_census(knot: Any, starts: list[dict], *, budget: str = "default", seed: int = 0,
+                  runner: Callable[[Any, str], Any] | None = None,
+                  say: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Follow the states of a census to w = 0, each by both routes, and name the thin-limit
+    ground (steps 2–4 of the module docstring; the atlas's thin stage runs this per knot).
+
+    Parameters
+    ----------
+    knot
+        A catalogue entry or name.
+    starts : list of dict
+        The states in the census's order (by increasing ε), each with ``coords`` (its
+        representative chain at the atlas width), ``name``, ``label``, ``multiplicity``,
+        ``structure``, ``epsilon`` and ``searches``.
+    budget, seed, runner, say
+        As :func:`thin_limit_states`.
+
+    Returns
+    -------
+    dict
+        ``states`` (one row per start, as :func:`thin_limit_states` describes), ``ground``,
+        ``margin``, ``crossing``, ``shape``, ``epsilon_thin``, ``error`` and ``parameters``.
+    """
+    from stiffknots.knots.catalogue import Knot, get_knot
+
+    V.choice("budget", budget, tuple(BUDGETS))
+    k = knot if isinstance(knot, Knot) else get_knot(knot)
+    run = runner or (lambda p, _label: solve(p))
+    say = say or (lambda _s: None)
     b = BUDGETS[budget]
-    fs = follow_states(k, [{"coords": items[s.representative]["coords"],
-                            "tag": f"state {i} ({s.name})"} for i, s in enumerate(chosen)],
-                       seed=seed, runner=run, say=say, **b)
+    fs = follow_states(k, [{"coords": s["coords"], "tag": f"state {i} ({s['name']})"}
+                           for i, s in enumerate(starts)],
+                       seed=V.seed(seed), runner=run, say=say, **b)
     rows = []
-    for i, (s, br) in enumerate(zip(chosen, fs["branches"], strict=True)):
-        route = structure_route(br, say=say, tag=f"state {i} ({s.name})")
+    for i, (s, br) in enumerate(zip(starts, fs["branches"], strict=True)):
+        route = structure_route(br, say=say, tag=f"state {i} ({s['name']})")
         eps_t, err = br["epsilon_thin"], br["error"]
         agree = None
         if route["epsilon"] is not None and eps_t is not None and route["keeps_knot"] \
@@ -203,8 +259,8 @@ def thin_limit_states(knot: Any, budget: str = "default", seed: int = 0, *,
             agree = abs(eps_t - route["epsilon"]) <= max(2 * (err or 0.0),
                                                          AGREE_REL * route["epsilon"])
         rows.append({
-            "shape": s.name, "label": s.label, "multiplicity": s.multiplicity,
-            "structure": s.structure, "epsilon": s.epsilon, "searches": s.searches,
+            "shape": s["name"], "label": s["label"], "multiplicity": s["multiplicity"],
+            "structure": s["structure"], "epsilon": s["epsilon"], "searches": s["searches"],
             "epsilon_thin": eps_t, "error": err, "event": br["event"],
             "events": br["events"], "shape_thin": br["points"][-1]["shape"],
             "structure_epsilon": route["epsilon"], "structure_error": route["error"],
@@ -212,7 +268,19 @@ def thin_limit_states(knot: Any, budget: str = "default", seed: int = 0, *,
             "agree": agree, "points": br["points"], "chains": br["chains"],
             "fit": br["fit"], "discretisation": br["discretisation"],
             "parameters": br["parameters"]})
-    g = fs["ground"]
+    return {**summarise_states(rows), "states": rows,
+            "parameters": {**b, "widths": list(b["widths"])}}
+
+
+def summarise_states(rows: list[dict]) -> dict[str, Any]:
+    """The thin-limit ground of followed states (rows of :func:`follow_census`): ``ground``
+    (the index of the lowest ``epsilon_thin``, None when none has one), ``margin`` (the next
+    state's ``epsilon_thin`` minus the ground's, and in combined errors), ``crossing`` (None,
+    or the widest width at which the thin-limit ground lies below state 0, the ground at the
+    atlas width), and the ground's ``shape``, ``epsilon_thin`` and ``error``."""
+    fitted = [(r["epsilon_thin"], i) for i, r in enumerate(rows)
+              if r["epsilon_thin"] is not None]
+    g = min(fitted)[1] if fitted else None
     margin = crossing = None
     if g is not None:
         others = [r for i, r in enumerate(rows) if i != g and r["epsilon_thin"] is not None]
@@ -223,16 +291,10 @@ def thin_limit_states(knot: Any, budget: str = "default", seed: int = 0, *,
             margin = {"next": rows.index(nxt), "gap": gap,
                       "sigmas": gap / sig if sig > 0 else None}
         if g != 0:
-            crossing = _crossing(fs["branches"][g], fs["branches"][0])
+            crossing = _crossing(rows[g], rows[0])
     ground = rows[g] if g is not None else None
-    return {"knot": k.name, "budget": budget, "seed": seed, "version": __version__,
-            "census": {"epsilon": res.best.epsilon, "converged": bool(res.converged),
-                       "convergence": res.convergence, "width": width,
-                       "replicas": len(items), "window": window,
-                       "states": [s.to_dict() for s in c.states]},
-            "states": rows, "ground": g, "margin": margin, "crossing": crossing,
+    return {"ground": g, "margin": margin, "crossing": crossing,
             "shape": None if ground is None else ground["shape"],
             "epsilon_thin": None if ground is None else ground["epsilon_thin"],
-            "error": None if ground is None else ground["error"],
-            "parameters": {**b, "widths": list(b["widths"]), "states": states},
-            "wall_time": time.time() - t0}
+            "error": None if ground is None else ground["error"]}
+

@@ -129,6 +129,24 @@ class IgnoreInterrupt(_WorkerPlugin):  # type: ignore[misc]
         _die_with_parent(os.getppid())  # a killed client (or nanny) takes its workers along
 
 
+class LoadSnappy(_WorkerPlugin):  # type: ignore[misc]
+    """Worker plugin of jobs that name knots by SnapPy (the thin stage's relaxations,
+    :func:`stiffknots.knots.identify.identify_details`): SnapPy is imported in the worker's
+    main thread. Its PARI library installs signal handlers when it loads, which only the main
+    thread may do: imported first in a task's thread, it failed ("signal only works in main
+    thread")."""
+
+    name = "stiffknots-load-snappy"
+
+    def setup(self, worker: Any) -> None:
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            from stiffknots.knots.exterior import _snappy
+
+            _snappy()
+
+
 def local_cluster(n_workers: int, local_directory: str | None = None) -> Any:
     """A ``distributed.LocalCluster`` in this process: ``n_workers`` worker processes under
     nannies, one thread each, HTTP on a free local port, no memory limit; their scratch

@@ -55,7 +55,7 @@ class _Rows(HTMLParser):
                 self._cell["spans"][self._span] += data
 
 
-COLS = ["thumb", "knot", "n_c", "n", "i", "bounds", "shape", "eps", "width", "converged",
+COLS = ["thumb", "knot", "n_c", "n", "i", "bounds", "thin", "shape", "eps", "width", "converged",
         "metastable", "dmin", "families"]
 
 

@@ -235,3 +235,32 @@ def test_every_knot_page_loads_from_disk_without_errors(page, atlas):
     p.locator("nav.top a", has_text="all knots").click()
     p.wait_for_selector("#knots")
     page.check()
+
+
+def test_the_thin_limit_column_and_the_branch_diagram(page, atlas):
+    """#37: the index's ε* column (the thin-limit ground, ≠ where the finite-width ground
+    differs) sorts by number; a knot page draws the branch diagram (one curve per state, the
+    w = 0 values on the axis) and shows the thin-limit ground's chain in the 3D view."""
+    p = page.page
+    p.goto(atlas.as_uri())
+    col = _column(p, "ε* (w → 0)")
+    cell = p.locator("#knots tbody tr[data-name='4_1'] td").nth(col)
+    assert "126.03 ± 0.18" in cell.inner_text() and "≠ finite" in cell.inner_text()
+    p.locator("#knots thead th").nth(col).locator("button").click()
+    assert _visible(p)[0] == "4_1"              # the only knot with an ε*: first ascending
+    p.goto((atlas.parent / "knots" / "4_1.html").as_uri())
+    p.wait_for_selector("#branch-plot .main-svg")
+    names = p.locator("#branch-plot").evaluate("d => d.data.map(t => t.name)")
+    assert "1: other (thin-limit ground)" in names and "0: 4C" in names
+    xs0 = p.locator("#branch-plot").evaluate(
+        "d => d.data.filter(t => t.name.endsWith('structure route')).map(t => t.x[0])")
+    assert xs0 == [0, 0]                        # both routes' values at w = 0
+    assert p.locator("#branch-plot .scatterlayer .trace").count() >= 5
+    assert "crossing" not in p.inner_text("#thin-title")
+    assert "branches cross near w/L = 0.002" in p.inner_text("main")
+    sel = p.locator("#state-select")
+    thin = next(o for o in sel.locator("option").all_inner_texts() if o.startswith("thin"))
+    sel.select_option(label=thin)
+    p.wait_for_timeout(300)
+    assert "thin-limit ground other" in p.inner_text("#view-caption")
+    page.check()

@@ -9,6 +9,7 @@ import pytest
 
 from atlas_support import TUBE_RADIUS
 from stiffknots.report.atlas import format_width, write_atlas
+from stiffknots.report.atlas.knot_page import THIN_RADIUS
 from stiffknots.report.render import DEFAULT_RADIUS
 from stiffknots.theory import closed_bounds
 
@@ -27,11 +28,17 @@ def test_knot_pages_show_every_state(atlas, knots, script_json):
                 assert f"{s['min_segment_distance']:.3f}" in plain
                 assert f"{s['count']} / {m['replicas']}" in plain
                 assert width in plain
-        assert len(states) == n_states
+        # the thin-limit ground's chain, a finite-width chain at its own w/L (§V A, #37)
+        n_thin = int(bool(k.get("thin")))
+        assert len(states) == n_states + n_thin
         for st in states:
             assert len(st["v"]) == st["rings"] * st["sides"] * 3
             assert len(st["t"]) == st["rings"] == 150
-            assert " at " in st["caption"] and "ε = " in st["caption"]
+            assert " at " in st["caption"]
+            assert ("ε = " in st["caption"]) != st["label"].startswith("thin limit")
+        if n_thin:
+            assert "ε* = 126.03 ± 0.18 (w → 0)" in states[-1]["caption"]
+            assert "at w/L = 0.0005" in states[-1]["caption"]
         b = closed_bounds(k["n"], k["i"])
         assert f"{b.lower:.2f} ≤ ε* ≤ {b.upper:.2f}" in plain
 
@@ -39,8 +46,10 @@ def test_knot_pages_show_every_state(atlas, knots, script_json):
 def test_the_drawing_radius_reaches_the_3d_view(atlas, script_json):
     text = (atlas.parent / "knots" / "4_1.html").read_text(encoding="utf-8")
     states = script_json(text, "states-data")
-    assert [s["label"].split(" — ")[0] for s in states] == ["bead", "bead", "tube"]
-    for s, radius in zip(states, [DEFAULT_RADIUS, DEFAULT_RADIUS, TUBE_RADIUS], strict=True):
+    assert [s["label"].split(" — ")[0] for s in states] == ["bead", "bead", "tube",
+                                                            "thin limit"]
+    for s, radius in zip(states, [DEFAULT_RADIUS, DEFAULT_RADIUS, TUBE_RADIUS, THIN_RADIUS],
+                         strict=True):
         v = np.asarray(s["v"]).reshape(s["rings"], s["sides"], 3)
         d = np.linalg.norm(v - v.mean(axis=1, keepdims=True), axis=2)
         assert d.min() == pytest.approx(radius, abs=2e-3)

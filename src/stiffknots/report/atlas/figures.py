@@ -233,3 +233,58 @@ def shape_badge(label: str | None, shape: str | None, extra: dict,
     colour = shape_style(shape, extra)[1]
     tip = f' title="{esc(structure)}"' if structure else ""
     return f'<span class="shape" style="background:{esc(colour)}"{tip}>{esc(label)}</span>'
+
+
+#: colours of the branches of a branch diagram (plotly's default sequence)
+BRANCH_COLOURS = ("#636efa", "#ef553b", "#00cc96", "#ab63fa", "#ffa15a", "#19d3f3",
+                  "#ff6692", "#b6e880", "#ff97ff", "#fecb52")
+
+
+def branch_figure(thin: dict, name: str) -> dict:
+    """The branch diagram of a knot's thin stage as a plotly figure (data and layout): ε
+    against w/L, one curve per state (the points fitted solid, those after the branch left
+    its state open), and at w = 0 each state's extrapolated ε* with its error bar (filled
+    circle) and its structure route's value (diamond)."""
+    data = []
+    for j, s in enumerate(thin["states"]):
+        c = BRANCH_COLOURS[j % len(BRANCH_COLOURS)]
+        lab = f"{j}: {s['name']}" + (" (thin-limit ground)" if thin["ground"] == j else "")
+        fit = [p for p in s["points"] if p["in_fit"]]
+        out = [p for p in s["points"] if not p["in_fit"]]
+        data.append({"type": "scatter", "mode": "lines+markers", "name": lab,
+                     "legendgroup": str(j), "line": {"color": c},
+                     "x": [thin["w_over_L"]] + [p["w_over_L"] for p in fit],
+                     "y": [s["epsilon"]] + [p["epsilon"] for p in fit],
+                     "hovertemplate": "w/L = %{x:.3g}<br>ε = %{y:.3f}<extra>" + lab
+                                      + "</extra>"})
+        if out:
+            data.append({"type": "scatter", "mode": "markers", "showlegend": False,
+                         "legendgroup": str(j), "name": f"{lab}: left its state",
+                         "marker": {"color": c, "symbol": "circle-open", "size": 8},
+                         "x": [p["w_over_L"] for p in out], "y": [p["epsilon"] for p in out],
+                         "hovertemplate": "w/L = %{x:.3g}<br>ε = %{y:.3f}<extra>" + lab
+                                          + ": left its state (" + str(s["event"]) + ")"
+                                          + "</extra>"})
+        if s["epsilon_thin"] is not None:
+            data.append({"type": "scatter", "mode": "markers", "showlegend": False,
+                         "legendgroup": str(j), "name": f"{lab}: ε* extrapolated",
+                         "marker": {"color": c, "size": 10}, "x": [0.0],
+                         "y": [s["epsilon_thin"]],
+                         "error_y": {"type": "data", "array": [s["error"] or 0.0],
+                                     "color": c},
+                         "hovertemplate": "w = 0 (extrapolated)<br>ε* = %{y:.4f}<extra>"
+                                          + lab + "</extra>"})
+        if s["structure_epsilon"] is not None:
+            data.append({"type": "scatter", "mode": "markers", "showlegend": False,
+                         "legendgroup": str(j), "name": f"{lab}: structure route",
+                         "marker": {"color": c, "size": 11, "symbol": "diamond-open"},
+                         "x": [0.0], "y": [s["structure_epsilon"]],
+                         "hovertemplate": "w = 0 (structure route: "
+                                          + str(s["structure_name"] or "") + ")<br>"
+                                          "ε* = %{y:.4f}<extra>" + lab + "</extra>"})
+    layout = {"title": {"text": f"{name}: every state followed to w = 0"},
+              "xaxis": {"title": {"text": "w/L"}, "rangemode": "tozero"},
+              "yaxis": {"title": {"text": "ε = E L / C"}},
+              "margin": {"l": 60, "r": 10, "t": 40, "b": 50}, "height": 420,
+              "legend": {"orientation": "h", "y": -0.2}}
+    return {"data": data, "layout": layout}

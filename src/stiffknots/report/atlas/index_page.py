@@ -84,6 +84,11 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
             ("n", "num", "num", "bridge number"), ("i", "num", "num", "braid index"),
             ("bounds (thin limit)", "num", "num",
              "2π²n² ≤ ε* ≤ 2π² min(α²n², i²): bounds on the thin-limit ground-state energy"),
+            ("ε* (w → 0)", "num", "num",
+             "the thin-limit ground: every state of the knot's tube census followed to w = 0 "
+             "(stiffknots atlas --thin), the lowest extrapolated ε* with its error; its state "
+             "and structure, whether the structure route (the state's structure solved at "
+             "w = 0) agrees, and ≠ where it is not the ground at the census's width"),
             ("ground shape", "text", "", "shape class of the lowest state found"),
             ("ε (ground)", "num", "num",
              "ε = E L / C of the lowest state found, at the width in the next column"),
@@ -146,6 +151,8 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
             dv = "" if k.lower is None else f' data-v="{k.lower:.6f}"'
             cells.append(f'<td class="num"{dv}>{num(k.lower)} – {num(k.upper)}'
                          f"{extra_b}</td>")
+
+        cells.append(_thin_cell(k))
 
         def gs(m: ModelRow):
             return m.ground
@@ -212,6 +219,22 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
     parts.append("</table>\n</footer>\n</main>\n<script>\n" + asset("atlas-index.js")
                  + "</script>\n</body>\n</html>\n")
     return "".join(parts)
+
+
+def _thin_cell(k: KnotRow) -> str:
+    """The ε* cell of a knot: the thin-limit ground of its thin stage, or —."""
+    t = k.thin
+    g = None if t is None or t["ground"] is None else t["states"][t["ground"]]
+    if g is None:
+        return '<td class="num">—</td>'
+    routes = {True: "routes ✓", False: "routes ✗", None: "one route"}[g["agree"]]
+    other = (f' · <span class="thin-differs" title="the ground at w/L = {t["w_over_L"]:.2g} '
+             f'is {esc(t["states"][0]["name"])}">≠ finite</span>' if t["ground"] != 0 else "")
+    struct = g["structure_name"] or g["name"]
+    err = f" ± {g['error']:.2g}" if g["error"] is not None else ""
+    return (f'<td class="num thin" data-v="{g["epsilon_thin"]:.6f}">'
+            f'{num(g["epsilon_thin"])}{err}<br><small>{esc(g["name"])}: {esc(struct)} · '
+            f"{routes}{other}</small></td>")
 
 
 def _families_html(families: Mapping, slugs: Mapping[str, str] | None = None) -> str:

@@ -4,7 +4,13 @@ state."""
 from __future__ import annotations
 
 from stiffknots._version import __version__
-from stiffknots.report.atlas.figures import COLORSCALE, ZONE_COLOURS, shape_badge, state_mesh
+from stiffknots.report.atlas.figures import (
+    COLORSCALE,
+    ZONE_COLOURS,
+    branch_figure,
+    shape_badge,
+    state_mesh,
+)
 from stiffknots.report.atlas.markup import (
     asset,
     audit_note,
@@ -17,7 +23,10 @@ from stiffknots.report.atlas.markup import (
 from stiffknots.report.atlas.schema import ZONE_KINDS, KnotRow, StateRow
 from stiffknots.report.text import segment_distance_text
 
-__all__ = ["knot_page"]
+__all__ = ["knot_page", "THIN_RADIUS"]
+
+#: tube radius (bonds) of the drawing of a thin-limit chain: its own w is far too thin to see
+THIN_RADIUS = 0.25
 
 
 def _count_text(st: StateRow, replicas: int | None) -> str:
@@ -109,6 +118,8 @@ def knot_page(k: KnotRow, models: list[tuple[str, str]], default: str | None, ti
                 f'<td class="width">{esc(st.width) if st.width else "—"}</td>'
                 f"<td>{view}</td></tr>\n")
         parts.append("</tbody></table>\n")
+    if k.thin is not None:
+        parts.append(_thin_section(k, states_js))
     if states_js:
         parts.append(
             '<h2 id="view-title">3D view</h2>\n<div class="viewer">\n<div class="view-controls">'
@@ -139,6 +150,78 @@ def knot_page(k: KnotRow, models: list[tuple[str, str]], default: str | None, ti
                      '<script type="application/json" id="zone-colours-data">'
                      + json_script(list(ZONE_COLOURS)) + "</script>\n"
                      "<script>\n" + asset("atlas-knot.js") + "</script>\n")
+    if k.thin is not None:
+        parts.append("<script>\n" + asset("atlas-branches.js") + "</script>\n")
     parts.append(f"<footer>stiffknots {esc(__version__)}</footer>\n</main>\n</body>\n</html>\n")
+    return "".join(parts)
+
+
+def _thin_section(k: KnotRow, states_js: list[dict]) -> str:
+    """The page's thin-limit section: the states of the tube census followed to w = 0 (a
+    table, the branch diagram) and the thin-limit ground's thinnest chain added to the 3D
+    view's states (``states_js``)."""
+    t = k.thin
+    g = None if t["ground"] is None else t["states"][t["ground"]]
+    parts = ['<h2 id="thin-title">Thin limit (w → 0)</h2>\n']
+    lede = (f"The states of the tube census at w/L = {t['w_over_L']:.2g}, each followed down "
+            f"a ladder of widths and extrapolated to w = 0 (budget {esc(t['budget'] or '?')},"
+            f" seed {esc(t['seed'])}), and each solved at w = 0 by the structure route (its "
+            "structure read from its thinnest chain).")
+    if g is not None:
+        err = f" ± {g['error']:.2g}" if g["error"] is not None else ""
+        lede += (f" Thin-limit ground: <b>{esc(g['name'])}</b>, ε* = "
+                 f"{g['epsilon_thin']:.4f}{err}")
+        if g["structure_epsilon"] is not None:
+            lede += (f"; structure route ({esc(g['structure_name'] or '')}) "
+                     f"{g['structure_epsilon']:.4f}, "
+                     + {True: "agreeing", False: "not agreeing",
+                        None: "not compared"}[g["agree"]])
+        lede += "."
+        if t["ground"] != 0:
+            lede += (f" It is not the ground at the census's width ({esc(t['states'][0]['name'])}"
+                     ")" + (f": the branches cross near w/L = {t['crossing']:.2g}"
+                            if t["crossing"] is not None else "") + ".")
+    else:
+        lede += " No state reached w = 0 in its own state (every branch jumped or merged)."
+    parts.append(f'<p class="lede">{lede}</p>\n')
+    parts.append('<table class="states thin-states"><thead><tr><th>state</th>'
+                 f'<th class="num">ε at w/L = {t["w_over_L"]:.2g}</th>'
+                 '<th class="num" title="extrapolated along the branch">ε* (branch)</th>'
+                 '<th class="num" title="its structure solved at w = 0">ε* (structure)</th>'
+                 "<th>structure</th><th>routes</th><th>event</th></tr></thead>\n<tbody>\n")
+    for j, s in enumerate(t["states"]):
+        mark = " (ground)" if t["ground"] == j else ""
+        branch = "—"
+        if s["epsilon_thin"] is not None:
+            branch = f"{s['epsilon_thin']:.4f}" + (
+                f" ± {s['error']:.2g}" if s["error"] is not None else "")
+        route = "—" if s["structure_epsilon"] is None else f"{s['structure_epsilon']:.4f}"
+        agree = {True: "agree", False: "differ", None: "—"}[s["agree"]]
+        view = (f' class="thin-row state-row" data-state="{len(states_js)}"'
+                if t["ground"] == j and t.get("chain") is not None else ' class="thin-row"')
+        parts.append(
+            f'<tr{view} data-thin-state="{j}"><td>{j}: {esc(s["name"])}{mark}</td>'
+            f'<td class="num">{num(s["epsilon"])}</td><td class="num">{branch}</td>'
+            f'<td class="num">{route}</td>'
+            f"<td>{esc(s['structure_name']) if s['structure_name'] else '—'}</td>"
+            f"<td>{agree}</td><td>{esc(s['event']) if s['event'] else '—'}</td></tr>\n")
+    parts.append("</tbody></table>\n")
+    parts.append('<div id="branch-plot" class="plot"></div>\n'
+                 '<p class="figure-note">ε against w/L for each state (lines: the points '
+                 "fitted; open circles: after the branch left its state). At w = 0: the "
+                 "extrapolated ε* with its error (filled) and the structure route (diamond). "
+                 "Every ε at w/L &gt; 0 is a finite-width value at the width of its point.</p>\n"
+                 '<script type="application/json" id="branch-data">'
+                 + json_script(branch_figure(t, k.name)) + "</script>\n")
+    ch = t.get("chain")
+    if ch is not None and g is not None:
+        wl = f"w/L = {ch['w_over_L']:.2g}" if ch["w_over_L"] is not None else "its thinnest width"
+        err = f" ± {g['error']:.2g}" if g["error"] is not None else ""
+        cap = (f"{k.name}, thin-limit ground {g['name']}, ε* = {g['epsilon_thin']:.2f}{err} "
+               f"(w → 0): its chain at {wl}, N = {len(ch['coords'])} (the computed chain "
+               "nearest the w = 0 structure)")
+        states_js.append({**state_mesh(ch["coords"], closed=True, radius=THIN_RADIUS),
+                          "zones": None, "caption": cap,
+                          "label": f"thin limit — ground {g['name']} at {wl}"})
     return "".join(parts)
 

@@ -18,6 +18,7 @@ Input schema
                                          #   stiffknots.theory.closed_bounds(n, i)
       "families": ["4C"],                # optional: shape families the knot belongs to
       "note": "...",                     # optional free text for the knot's page
+      "thin": THIN,                      # optional: its states followed to w = 0 (below)
       "models": {                        # optional: one entry per energy model, e.g. bead, tube
         "bead": {
           "width": "bead rule d = 1/√2, N = 150",   # optional default for the states below
@@ -58,6 +59,28 @@ never as the paper's thin-limit ``ε*`` (which lies below every finite-width val
 ``ε*_w`` rises with ``w``). A state with an ``epsilon`` therefore needs a ``width`` (its own or
 its model's); a bare number is refused, since it would not say whether it is a bead distance or
 ``w/L``. The bounds are thin-limit quantities and are labelled so.
+
+``THIN`` (optional, the atlas's thin stage, :mod:`stiffknots.studies.thin_stage`) is a dict::
+
+    {
+      "w_over_L": 0.0047,                # the width of the census the states were taken at
+      "budget": "small", "seed": 0,      # optional
+      "ground": 0,                       # index into states of the thin-limit ground (or None)
+      "crossing": None,                  # optional: w/L below which it lies under state 0
+      "states": [{                       # the census's states, by ε at that width
+        "name": "other", "epsilon": 128.57,          # ε at w_over_L
+        "epsilon_thin": 126.03, "error": 0.18,       # ε* extrapolated to w = 0 (or None)
+        "structure_epsilon": 126.1586, "structure_name": "point-braid + 2 double points",
+        "agree": True,                   # the two routes agree (None: not compared)
+        "event": None,                   # "jumped" / "merged": the branch left its state
+        "points": [{"w_over_L": 0.004, "epsilon": 127.95, "in_fit": True}, ...],
+      }, ...],
+      "chain": {"coords": array (N, 3), "w_over_L": 0.0005},   # optional: the ground's
+                                         #   thinnest chain (the 3D view)
+    }
+
+Every ``epsilon_thin`` and ``structure_epsilon`` is a thin-limit number (w = 0); every
+``epsilon`` of a point states its ``w_over_L``.
 
 ``families`` (optional) is the family statistics table::
 
@@ -171,6 +194,7 @@ class KnotRow:
     families: list[str]
     note: str | None
     models: dict[str, ModelRow] = field(default_factory=dict)
+    thin: dict | None = None
 
 
 def format_width(width: Any) -> str:
@@ -365,6 +389,7 @@ def parse_knots(knots: Sequence[Mapping]) -> list[KnotRow]:
                        attained_by=None if who is None else str(who), exact=exact,
                        families=[str(f) for f in fams],
                        note=None if d.get("note") is None else str(d["note"]))
+        knot.thin = _thin(d.get("thin"), f"knot {name}: thin")
         models = d.get("models") or {}
         if not isinstance(models, Mapping):
             raise ValueError(f"knot {name}: models must be a dict of model name -> results")
@@ -394,6 +419,56 @@ def parse_knots(knots: Sequence[Mapping]) -> list[KnotRow]:
                 width=mw)
         out.append(knot)
     return out
+
+
+def _thin(t: Any, where: str) -> dict | None:
+    """A knot's ``thin`` entry, checked (the schema above); None when absent."""
+    if t is None:
+        return None
+    if not isinstance(t, Mapping):
+        raise ValueError(f"{where}: expected a dict with 'w_over_L' and 'states'")
+    wl = _opt_float(t.get("w_over_L"), f"{where}.w_over_L")
+    if wl is None or not wl > 0:
+        raise ValueError(f"{where}: w_over_L (the census's width) must be a number > 0")
+    states = t.get("states")
+    if not isinstance(states, Sequence) or isinstance(states, str):
+        raise ValueError(f"{where}: states must be a list")
+    out_states = []
+    for j, s in enumerate(states):
+        w = f"{where}, state {j}"
+        if not isinstance(s, Mapping) or "name" not in s or "epsilon" not in s:
+            raise ValueError(f"{w}: expected a dict with 'name' and 'epsilon'")
+        pts = []
+        for p in s.get("points") or []:
+            pw = _opt_float(p.get("w_over_L"), f"{w}: points.w_over_L")
+            pe = _opt_float(p.get("epsilon"), f"{w}: points.epsilon")
+            if pw is None or pe is None:
+                raise ValueError(f"{w}: every point needs w_over_L and epsilon")
+            pts.append({"w_over_L": pw, "epsilon": pe, "in_fit": bool(p.get("in_fit", True))})
+        out_states.append({
+            "name": str(s["name"]), "epsilon": _opt_float(s["epsilon"], f"{w}: epsilon"),
+            "epsilon_thin": _opt_float(s.get("epsilon_thin"), f"{w}: epsilon_thin"),
+            "error": _opt_float(s.get("error"), f"{w}: error"),
+            "structure_epsilon": _opt_float(s.get("structure_epsilon"),
+                                            f"{w}: structure_epsilon"),
+            "structure_name": None if s.get("structure_name") is None
+            else str(s["structure_name"]),
+            "agree": None if s.get("agree") is None else bool(s["agree"]),
+            "event": None if s.get("event") is None else str(s["event"]),
+            "points": pts})
+    g = t.get("ground")
+    if g is not None and not (isinstance(g, int) and 0 <= g < len(out_states)):
+        raise ValueError(f"{where}: ground must be an index into states")
+    chain = t.get("chain")
+    if chain is not None:
+        x = np.asarray(chain.get("coords"), dtype=float)
+        if x.ndim != 2 or x.shape[1] != 3 or len(x) < 3:
+            raise ValueError(f"{where}: chain.coords must be an (N ≥ 3, 3) array")
+        chain = {"coords": x, "w_over_L": _opt_float(chain.get("w_over_L"),
+                                                      f"{where}: chain.w_over_L")}
+    return {"w_over_L": wl, "budget": t.get("budget"), "seed": t.get("seed"), "ground": g,
+            "crossing": _opt_float(t.get("crossing"), f"{where}: crossing"),
+            "states": out_states, "chain": chain}
 
 
 def model_names(knots: list[KnotRow]) -> list[str]:
