@@ -329,6 +329,35 @@ def thin_states(d: dict) -> list[str]:
     return out
 
 
+def thin_stage(d: dict) -> list[str]:
+    def num(x, f=".4f"):
+        return "—" if x is None else format(x, f)
+
+    out = ["| knot | n, i | states | finite-width ground | thin-limit ground: ε* ± error | "
+           "structure route | routes | CPU s |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in d["knots"]:
+        out.append(f"| {r['knot']} | {r['n']}, {r['i']} | {len(r['states'])} | {r['finite']} | "
+                   f"{r['ground'] or '—'} {num(r['epsilon_thin'])} ± {num(r['error'], '.2g')}"
+                   f"{' (≠)' if r['differs'] else ''} | {num(r['structure_epsilon'])} | "
+                   f"{ {True: 'agree', False: 'differ', None: '—'}[r['agree']] } | "
+                   f"{num(r['cpu_seconds'], '.0f')} |")
+    run = d.get("run") or {}
+    cost = (f" The sweep took {run['sweep_wall_seconds']:,.0f} s wall "
+            f"({run['sweep_cpu_seconds']:,.0f} CPU s), the thin stage "
+            f"{run['thin_wall_seconds']:,.0f} s wall ({run['thin_cpu_seconds']:,.0f} CPU s) on "
+            f"{run['workers']} workers." if run.get("thin_wall_seconds") else "")
+    ni = "; ".join(f"{e['knot']} {100 * e['rel']:+.3f} %" for e in d["n_eq_i"])
+    out += ["", f"{d['n_knots']} knots, {d['states']} states; {d['agree']} of {d['compared']} "
+                f"states with both routes agree; {d['no_limit']} branches left their state "
+                f"(no limit of their own). Thin-limit grounds by class: "
+                + ", ".join(f"{k} {v}" for k, v in sorted(d["classes"].items()))
+                + f"; the thin-limit ground is not the finite-width ground for "
+                f"{len(d['differs'])} knots ({', '.join(d['differs']) or 'none'}). n = i "
+                f"knots against 2π²i²: {ni or '—'}.{cost}"]
+    return out
+
+
 #: (file name, title, what it measures, the script, renderer), in the order of the page
 BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
     ("defaults_survey", "`stiffknots anneal` with its defaults, every prime knot through 8 "
@@ -366,6 +395,11 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
     ("thin_states", "Every state to w = 0", "`stiffknots thin-limit K` as typed: each state of "
      "the census followed to w/L → 0, both routes, the thin-limit ground state and the time",
      "python bench/thin_states.py 3_1:small 4_1 5_2 ...", thin_states),
+    ("thin_stage", "The atlas's thin stage: every knot's states to w = 0",
+     "`stiffknots atlas --thin` on the tube atlas: each knot's census followed to w/L → 0 on "
+     "Dask, both routes, the thin-limit grounds and the cost",
+     "stiffknots atlas --max-crossings 8 --models tube --thin --json > RUN.json; python "
+     "bench/thin_stage.py DB --run RUN.json", thin_stage),
     ("small_jobs", "Small jobs", "wall and CPU seconds of short commands as typed (fresh "
      "processes, kernels cached)", "python bench/small_jobs.py", small_jobs),
     ("last_run", "The kernel and the time to the paper's energies (`make bench`)",
