@@ -29,7 +29,8 @@ def test_free_exponent_recovered_without_noise(p):
     assert r.epsilon == pytest.approx(EPS, abs=1e-3)
 
 
-@pytest.mark.parametrize("p", [2 / 3, 1.0, 2.0])
+@pytest.mark.parametrize("p", [pytest.param(2 / 3, marks=pytest.mark.slow), 1.0,
+                               pytest.param(2.0, marks=pytest.mark.slow)])   # ≈ 7 s each
 def test_two_sigma_bar_covers_the_truth(p):
     """200 noisy series: the 2 sigma bar covers the limit in >= 90 % of them."""
     rng = np.random.default_rng(12)

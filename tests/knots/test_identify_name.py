@@ -126,7 +126,9 @@ def _perturbed(knot, rng):
     pytest.skip(f"no coarse version of the {knot.name} embedding kept its type")
 
 
-@pytest.mark.parametrize("name", [k.name for k in catalogue(8) if k.crossing_number >= 3])
+@pytest.mark.parametrize("name", [
+    pytest.param(k.name, marks=() if k.crossing_number <= 7 else pytest.mark.slow)
+    for k in catalogue(8) if k.crossing_number >= 3])   # the 21 knots of 8 crossings: ≈ 60 s
 def test_perturbed_embeddings_through_8_crossings(name):
     rng = np.random.default_rng(abs(hash(name)) % 2**32)
     y = _perturbed(get_knot(name), rng)

@@ -227,6 +227,7 @@ def test_the_knot_of_a_result_is_one_catalogue_name(name):
     assert f"{name}|" not in json.dumps(d)  # no tie such as "5_1|10_132" anywhere
 
 
+@pytest.mark.slow  # ≈ 19 s
 def test_a_knot_beyond_the_table_is_verified_by_its_start():
     # 13a_1 is not in topoly's HOMFLY-PT table: the final chain must have its start's
     # polynomial (it used to end in a false 'TopologyChangedError')

@@ -112,6 +112,7 @@ def test_a_singular_kkt_matrix_prints_nothing(capfd, monkeypatch, dense_rows):
     assert r.max_bond_error < 1e-10 and r.exclusion_margin >= 0
 
 
+@pytest.mark.slow  # ≈ 20 s
 def test_held_diagnostics_restore_the_descriptors_with_threads():
     # threads that factorise at once share one redirection of fds 1 and 2: none may save
     # another's /dev/null and leave the process without its output
