@@ -76,7 +76,8 @@ class ThinResult:
                 "jobs": [j.knot for j in self.jobs], "skipped": self.skipped,
                 "missing": self.missing, "ran": self.ran, "failed": self.failed,
                 "interrupted": self.interrupted, "wall_seconds": self.wall_seconds,
-                "cpu_seconds": self.cpu_seconds, "version": __version__}
+                "cpu_seconds": self.cpu_seconds, "workers": self.workers,
+                "version": __version__}
 
 
 def run_key(census: dict, states: Sequence[dict], budget: str, seed: int) -> str:
