@@ -68,6 +68,8 @@ def thin_verdict(t: Mapping[str, Any]) -> str:
 
 
 def print_thin(t: Mapping[str, Any]) -> None:
+    """Print a knot's thin run: :func:`thin_table`, :func:`thin_verdict` and when and by what
+    it was computed."""
     out.print(thin_table(t))
     out.print(thin_verdict(t), highlight=False, markup=False)
     out.print(f"computed {t['created']} by stiffknots {t['version']}"

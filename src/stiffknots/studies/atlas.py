@@ -47,7 +47,8 @@ from stiffknots.width import Width
 
 __all__ = ["DEFAULT_OUT", "DEFAULT_DB", "bead_above_tube", "knot_records", "atlas_input",
            "json_entry", "family_study", "families_table", "eps_n2_points", "run_atlas",
-           "structure_groups", "converged_counts", "not_converged_text"]
+           "structure_groups", "converged_counts", "not_converged_text", "thin_json",
+           "thin_input"]
 
 #: Where the pages go by default.
 DEFAULT_OUT = Path("results") / "atlas"
@@ -178,8 +179,9 @@ def audit_of(audits: Mapping[tuple, Mapping], model: Width, st: Mapping) -> dict
 
 
 def thin_json(t: Mapping | None) -> dict:
-    """The thin-stage fields of a knot's ``--json`` entry (:func:`stiffknots.store.thin.
-    thin_knots`' summary; all None when no thin run is stored): ``epsilon_thin``,
+    """The thin-stage fields of a knot's ``--json`` entry (from the summary of
+    :func:`stiffknots.store.thin.thin_knots`; all None when no thin run is stored):
+    ``epsilon_thin``,
     ``thin_error``, ``thin_structure``, ``thin_state`` (its name), ``thin_agree`` (the two
     routes), ``thin_width`` (the census's w/L), ``thin_budget`` and ``thin_states`` (per
     state: name, ε at the census's width, ε*, error, structure route, agree, event)."""

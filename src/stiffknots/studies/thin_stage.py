@@ -41,8 +41,9 @@ THIN_TOPIC = "stiffknots-thin"
 
 @dataclass
 class ThinJob:
-    """One knot's states to follow: ``census`` (the stored census, :func:`take_census`'s
-    dict), the chosen ``states`` (its rows) and their ``starts`` (chains), the run's key."""
+    """One knot's states to follow: ``census`` (the stored census, the dict of
+    :func:`stiffknots.store.census.take_census`), the chosen ``states`` (its rows) and their
+    ``starts`` (chains), the run's key."""
 
     knot: str
     run: str
