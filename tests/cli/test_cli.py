@@ -241,6 +241,7 @@ def test_anneal_unconverged_bead_rule_points_to_the_tube_model():
         assert " ".join(first.split()) not in " ".join(out.split())
 
 
+@pytest.mark.slow  # ≈ 19 s
 def test_anneal_schedule_auto_is_the_dynamics_unless_a_monte_carlo_option():
     """`anneal`'s default schedule (auto) runs the Langevin dynamics for the bead rule, with
     64 rounds at most; an option of the Monte Carlo (tube model, its moves' parameters …) runs

@@ -61,7 +61,8 @@ def run(x, settings, **kw):
     return run_replica(x, settings, **kw)
 
 
-@pytest.mark.parametrize("settings", [SMALL, PT, FORCE, TIGHT, HOPS],
+@pytest.mark.parametrize("settings", [SMALL, PT, FORCE, TIGHT,
+                                      pytest.param(HOPS, marks=pytest.mark.slow)],  # ≈ 16 s
                          ids=["anneal", "tempering", "force", "tight", "hops"])
 def test_stop_and_resume_is_exact(tmp_path, settings):
     x = start_of(settings)
