@@ -220,8 +220,7 @@ def thin_input(store: Store, t: Mapping | None) -> dict | None:
     chain = None
     if g is not None:
         p = g["details"]["points"][g["details"]["thin_point"]]
-        chain = {"coords": thin_chain(store, g["id"]), "w_over_L": p["w_over_L"],
-                 "beads": g["beads_thin"] if "beads_thin" in g else None}
+        chain = {"coords": thin_chain(store, g["id"]), "w_over_L": p["w_over_L"]}
     return {"budget": t["budget"], "seed": t["seed"], "w_over_L": t["w_over_L"],
             "ground": None if g is None else g["state"], "crossing": t["crossing"],
             "margin": t["margin"], "states": states, "chain": chain}
@@ -554,9 +553,8 @@ def run_atlas(knots: Sequence[str], models: Sequence[Width], budget: Budget, *,
         if thin is not None and run:
             from stiffknots.studies.thin_stage import run_thin
 
-            stage = run_thin(store, [k for k in knots if store.ensembles(
-                knot=k, exclusion="tube")], budget=thin, seed=seed, states=thin_states,
-                scheduler=scheduler, workers=workers, listener=thin_listener)
+            stage = run_thin(store, list(knots), budget=thin, seed=seed, states=thin_states,
+                             scheduler=scheduler, workers=workers, listener=thin_listener)
             result["thin"] = stage.to_dict()
             if stage.interrupted:
                 return result

@@ -185,7 +185,7 @@ def thin_rows_of(job: ThinJob, out: dict, budget: str, seed: int) -> list[dict]:
         last = fitted[-1] if fitted else len(r["points"]) - 1
         event = r["event"]["kind"] if r["event"] is not None else None
         details = {
-            "points": [{k: v for k, v in p.items() if k != "chain"} for p in r["points"]],
+            "points": r["points"],
             "events": r["events"], "fit": r["fit"], "discretisation": r["discretisation"],
             "parameters": r["parameters"], "route": r["structure_route"],
             "shape": r["shape"], "structure": r["structure"], "searches": r["searches"],
