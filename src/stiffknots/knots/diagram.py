@@ -43,6 +43,8 @@ def reduce_polygon(coords) -> np.ndarray:
     import contextlib
     import io
 
+    from stiffknots.knots.topoly_core import kmt_reduce
+
     x = np.asarray(coords, dtype=np.float64)
     if len(x) > 3 and np.array_equal(x[0], x[-1]):
         x = x[:-1]
@@ -50,17 +52,8 @@ def reduce_polygon(coords) -> np.ndarray:
         return x
     rot = generic_rotation(0)
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        import topoly
-        from topoly.params import ReduceMethod
-
-        red = topoly.reduce_structure((x @ rot.T).tolist(), reduce_method=ReduceMethod.KMT,
-                                      output_type="xyz")
-    try:
-        y = np.array([[float(v) for v in ln.split()[-3:]]
-                      for ln in str(red).strip().splitlines() if ln.strip()])
-        if y.ndim != 2 or y.shape[1] != 3 or len(y) < 3:
-            raise ValueError
-    except ValueError:
+        y = kmt_reduce(x @ rot.T)   # topoly's compiled KMT (topoly_core)
+    if y.ndim != 2 or y.shape[1] != 3 or len(y) < 3:
         return x
     return y @ rot  # back to the original frame (rot is orthogonal)
 

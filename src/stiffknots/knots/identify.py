@@ -2,7 +2,7 @@
 
 How it works
 ------------
-1. The polygon is handed to :func:`topoly.homfly` as a closed chain (``Closure.CLOSED``: topoly
+1. The polygon is handed to topoly's HOMFLY-PT code as a closed chain (``Closure.CLOSED``: topoly
    joins the last point to the first with a straight segment, exactly the closing bond of our
    closed chains; the first point must not be repeated at the end, though a repeat is harmless).
    The polygon is first turned by a fixed generic rotation, because topoly projects along z and
@@ -16,7 +16,10 @@ How it works
    chain is viewed along 24 more fixed directions and the projection with the fewest crossings
    is used, with KMT and then topoly's fast Reidemeister I/II simplification ("EASY"); the full
    Reidemeister simplification was found far too slow on such diagrams.  No random closure is
-   involved, and run_parallel/cuda are off: the answer is deterministic.
+   involved, and run_parallel/cuda are off: the answer is deterministic. The first attempt
+   calls topoly's compiled steps directly (:mod:`stiffknots.knots.topoly_core`: the same code
+   as :func:`topoly.homfly`, without its Python layer's 1–2 s import and ≈ 0.1–0.5 s a call);
+   only the rare diagram too large for it goes through topoly's own API.
 2. The polynomial (chiral: mirror images have mirrored polynomials) is looked up in topoly's
    bundled HOMFLY-PT table (all prime knots through 12 crossings plus many composite knots and
    links), without topoly's ``minimal`` filter, which silently drops the more complicated
@@ -81,6 +84,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from stiffknots.errors import IdentificationError
+from stiffknots.knots.topoly_core import homfly_kmt, kmt_reduce, polvalues
 
 __all__ = [
     "IdentificationError",
@@ -423,7 +427,6 @@ def _homfly_code(
     pseudo-random) directions and the one with the fewest crossings is used.  Raises
     :class:`IdentificationError` if no diagram small enough is found.
     """
-    topoly, Closure, ReduceMethod, _ = _topoly()
     x = np.asarray(coords, dtype=np.float64)
     if not closed:
         x = close_open_chain_along_z(x)
@@ -439,18 +442,21 @@ def _homfly_code(
     # on degenerate projections, e.g. strands stacked exactly above each other as in our braid
     # embeddings, or a planar polygon seen edge-on.
     x = x @ _GENERIC_ROTATION.T
-    code = _homfly_once(topoly, Closure, ReduceMethod, x, max_cross)
+    try:
+        with _quiet():   # topoly's compiled steps alone: topoly_core (the same code)
+            code = homfly_kmt(x, max_cross)
+    except Exception as exc:  # topoly raises assorted exceptions
+        raise IdentificationError(
+            f"topoly could not compute the HOMFLY-PT polynomial: {exc}") from exc
     if code is not None:
         return code
     # Too many crossings in the z projection even after KMT: reduce once, then look for the
-    # projection direction with the fewest crossings among a fixed set of rotations.
+    # projection direction with the fewest crossings among a fixed set of rotations (topoly's
+    # own API: rare, and its EASY simplification is Python code of topoly's).
+    topoly, Closure, ReduceMethod, _ = _topoly()
     with _quiet():
-        red = topoly.reduce_structure(x.tolist(), reduce_method=ReduceMethod.KMT, output_type="xyz")
-    try:
-        y = np.array([[float(v) for v in line.split()] for line in str(red).strip().splitlines()])
-        if y.ndim != 2 or y.shape[1] != 3 or len(y) < 3:
-            raise ValueError
-    except ValueError:
+        y = kmt_reduce(x)
+    if y.ndim != 2 or y.shape[1] != 3 or len(y) < 3:
         y = x
     rng = np.random.default_rng(12345)
     best, best_rot = _projected_crossings(y), np.eye(3)
@@ -560,8 +566,7 @@ def identify_code(code: str, *, max_crossings: int | None = None) -> str:
     """The knot names of a HOMFLY-PT polynomial (topoly's code, :func:`homfly_code`), as
     :func:`identify` returns them: mirror-insensitive KnotInfo names joined by '|', or
     'unknown' when the polynomial is not in topoly's table."""
-    _, _, _, polvalues = _topoly()
-    raw = polvalues["HOMFLYPT"].get(code, "Unknown")
+    raw = polvalues()["HOMFLYPT"].get(code, "Unknown")
     if raw == "Unknown":
         return "unknown"
     cands = [c for c in raw.split("|") if "U" not in c and not c.lstrip("+-").startswith("L")]

@@ -124,11 +124,13 @@ def _drain(q, on_progress: Callable[[dict], None]) -> None:
 
 def _warm() -> None:
     """Import, in a fresh worker, what every job needs (the engine and its kernels, the knot
-    check's topoly: about 2 s), so that it happens while the parent builds its problem."""
+    check's compiled topoly code and its table), so that it happens while the parent builds
+    its problem."""
     import stiffknots.engine.driver  # noqa: F401
-    from stiffknots.knots.identify import _topoly
+    from stiffknots.knots.topoly_core import compiled, polvalues
 
-    _topoly()
+    compiled()
+    polvalues()
 
 
 class WorkerPool:
