@@ -81,6 +81,20 @@ def test_db_thin_shows_the_states_the_ground_and_the_routes(db, tmp_path):
     assert code == 0 and "no thin stage of 5_2 is stored" in out and "--thin" in out
 
 
+def test_the_verdict_says_why_the_grounds_routes_differ():
+    from stiffknots.cli.thin_table import thin_verdict
+
+    g = {"state": 1, "name": "other", "epsilon_thin": 128.422, "error": 0.13,
+         "structure_epsilon": 126.4725, "structure_name": "2 point-braids", "agree": False}
+    t = {"knot": "6_1", "ground": g, "margin": None, "states": [g], "w_over_L": 0.0047,
+         "finite": {"name": "other"}, "crossing": 0.002}
+    text = thin_verdict(t)
+    assert "(structure route 126.4725: differ: the branch's extrapolation lies 1.54 % above" \
+           in text and "upper estimate" in text
+    text = thin_verdict({**t, "ground": {**g, "agree": None}})
+    assert "126.4725: not compared)" in text and "upper estimate" not in text
+
+
 @pytest.mark.slow  # ≈ 2 min: a real thin stage, killed and resumed
 def test_a_thin_stage_killed_by_kill_9_resumes_and_then_skips(tmp_path):
     db, out = tmp_path / "a.db", tmp_path / "atlas"

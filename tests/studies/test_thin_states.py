@@ -45,3 +45,21 @@ def test_an_other_state_without_a_translatable_graph_has_no_route():
 def test_bad_input_is_refused_before_any_work(kw):
     with pytest.raises(InvalidParameter):
         thin_limit_states("3_1", **kw)
+
+
+def test_route_difference_says_why_two_routes_differ():
+    from stiffknots.studies.thin_states import route_difference
+
+    # agreeing, not compared, or no structure value: nothing to explain
+    assert route_difference(126.41, 126.4725, "2 point-braids", True) is None
+    assert route_difference(174.1, 169.2, "point-braid (m = 3) + point-braid", None) is None
+    assert route_difference(None, 142.58, "80", False) is None
+    # point-braid states above their w = 0 solution: the measured slow approach (6_1's cage,
+    # 8_2's 80 in bench/thin_deep.json)
+    why = route_difference(128.422, 126.4725, "2 point-braids", False)
+    assert "1.54 % above" in why and "upper estimate" in why and "point-braids" in why
+    assert "upper estimate" in route_difference(144.46, 142.5844, "80", False)
+    # another structure above: not asymptotic yet; below: not this branch's structure
+    assert "asymptotic" in route_difference(178.5, 177.6529, "CB(3)", False)
+    assert "not this branch's limit" in route_difference(125.0, 126.4725, "2 point-braids",
+                                                         False)

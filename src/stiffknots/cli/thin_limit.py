@@ -180,6 +180,10 @@ def _table(res) -> None:
                  + ("; too close to call" if m["sigmas"] is not None and m["sigmas"] < 2
                     else "") + ")")
     out.print(line, markup=False, highlight=False)
+    for i, st_i in enumerate(res["states"]):
+        if st_i.get("difference"):
+            out.print(f"  state {i}: routes differ — {st_i['difference']}", markup=False,
+                      highlight=False)
     if g != 0:
         where = (f"; the branches cross above w/L = {res['crossing']:g}"
                  if res["crossing"] is not None else "")

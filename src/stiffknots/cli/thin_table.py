@@ -9,6 +9,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from stiffknots.cli.app import out
+from stiffknots.studies.thin_states import route_difference
 
 __all__ = ["thin_table", "thin_verdict", "print_thin"]
 
@@ -49,8 +50,11 @@ def thin_verdict(t: Mapping[str, Any]) -> str:
     text = (f"{t['knot']}: thin-limit ground {g['name']}, ε* = {g['epsilon_thin']:.4f}"
             + (f" ± {g['error']:.2g}" if g["error"] is not None else ""))
     if g["structure_epsilon"] is not None:
+        why = route_difference(g["epsilon_thin"], g["structure_epsilon"], g["structure_name"],
+                               g["agree"])
         text += (f" (structure route {g['structure_epsilon']:.4f}: "
-                 + {True: "agree", False: "differ", None: "not compared"}[g["agree"]] + ")")
+                 + {True: "agree", False: "differ", None: "not compared"}[g["agree"]]
+                 + (f": {why}" if why else "") + ")")
     m = t.get("margin")
     if m:
         sig = f", {m['sigmas']:.1f} σ" if m.get("sigmas") is not None else ""

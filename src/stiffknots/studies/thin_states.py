@@ -36,7 +36,8 @@ from stiffknots.problems import validate as V
 from stiffknots.problems.base import solve
 from stiffknots.studies.branches import LADDER, follow_states
 
-__all__ = ["BUDGETS", "AGREE_REL", "structure_route", "thin_limit_states"]
+__all__ = ["BUDGETS", "AGREE_REL", "route_difference", "structure_route",
+           "thin_limit_states"]
 
 #: What one run spends: the ladder of w/L and how each width is reached.
 BUDGETS: dict[str, dict[str, Any]] = {
@@ -265,11 +266,43 @@ def follow_census(knot: Any, starts: list[dict], *, budget: str = "default", see
             "events": br["events"], "shape_thin": br["points"][-1]["shape"],
             "structure_epsilon": route["epsilon"], "structure_error": route["error"],
             "structure_name": route["name"], "structure_route": route,
-            "agree": agree, "points": br["points"], "chains": br["chains"],
+            "agree": agree,
+            "difference": route_difference(eps_t, route["epsilon"], route["name"], agree),
+            "points": br["points"], "chains": br["chains"],
             "fit": br["fit"], "discretisation": br["discretisation"],
             "parameters": br["parameters"]})
     return {**summarise_states(rows), "states": rows,
             "parameters": {**b, "widths": list(b["widths"])}}
+
+
+def route_difference(epsilon_thin: float | None, structure_epsilon: float | None,
+                     structure_name: str | None, agree: bool | None) -> str | None:
+    """Why a state's two routes differ, in one sentence (None when they agree or were not
+    compared).
+
+    Measured on branches continued to w/L = 6.25·10⁻⁵ (``bench/thin_deep.py``, the docs'
+    thin-limit page): circular braids approach w = 0 as w², a cage without twist linearly,
+    but states with point-braids (the 80s, most cages) with a local exponent that keeps
+    falling (towards ½: a twist of two strands inside a point-braid costs ∝ w^½), so one power
+    law fitted to the ladder lands *above* their limit — an upper estimate, the structure
+    route the number to read. A branch *below* its structure's w = 0 value has another limit
+    than the structure read from its thinnest chain.
+    """
+    if agree is not False or epsilon_thin is None or structure_epsilon is None:
+        return None
+    pct = 100 * (epsilon_thin - structure_epsilon) / structure_epsilon
+    braided = structure_name == "80" or "point-braid" in (structure_name or "")
+    if pct > 0 and braided:
+        return (f"the branch's extrapolation lies {pct:.2f} % above the w = 0 solution: "
+                "states with point-braids approach w = 0 more slowly than one power law "
+                "below the ladder, so the extrapolation is an upper estimate and the structure "
+                "route the value to read")
+    if pct > 0:
+        return (f"the branch's extrapolation lies {pct:.2f} % above the w = 0 solution: the "
+                "branch has not reached its asymptotic regime on this ladder (an upper "
+                "estimate)")
+    return (f"the branch's extrapolation lies {-pct:.2f} % below the w = 0 solution of the "
+            "structure read from its thinnest chain: that structure is not this branch's limit")
 
 
 def summarise_states(rows: list[dict]) -> dict[str, Any]:
