@@ -10,6 +10,7 @@ from stiffknots.knots.cage_embedding import (
     CageSpec,
     cage_chain,
     cage_curve,
+    cage_spec_for,
     embed_cage,
     two_box_conway,
 )
@@ -21,9 +22,36 @@ from stiffknots.knots.starts import available_starts, resolve_starts, split_repl
 
 @pytest.mark.parametrize("text,ab", [("[22]", (2, 2)), ("[32]", (3, 2)), ("[42]", (4, 2)),
                                      ("[3]", None), ("[312]", None), ("[3;3;2]", None),
-                                     ("", None), (None, None), ("[2 2]", None)])
+                                     ("", None), (None, None), ("[2 2]", (2, 2)),
+                                     ("[10 2]", (10, 2)), ("[6 6]", (6, 6)),
+                                     ("[10 2 1]", None), ("[1 x]", None)])
 def test_two_box_conway(text, ab):
     assert two_box_conway(text) == ab
+
+
+def test_two_box_conway_checks_the_crossing_number():
+    """'[11]' is KnotInfo's one-box (2, 11) torus knot 11a_367, not the cage [1 1]."""
+    assert two_box_conway("[11]") == (1, 1)
+    assert two_box_conway("[11]", 11) is None
+    assert two_box_conway("[22]", 4) == (2, 2)
+    assert two_box_conway("[10 2]", 12) == (10, 2)
+
+
+@pytest.mark.parametrize("name,ab", [("11a_367", None), ("11a_247", (9, 2)),
+                                     ("12a_803", (10, 2)), ("12a_1166", (8, 4)),
+                                     ("12a_1287", (6, 6))])
+def test_cage_spec_of_large_knots(name, ab):
+    """Twelve-crossing two-box knots (KnotInfo '[10 2]') have a cage; the (2, 11) torus knot
+    ('[11]') has none and is not listed in the cage family."""
+    from stiffknots.knots.families import families_of
+
+    k = get_knot(name)
+    assert ("4C" in families_of(k)) == (ab is not None)
+    if ab is None:
+        with pytest.raises(EmbeddingError):
+            cage_spec_for(k)
+    else:
+        assert cage_spec_for(k) == CageSpec(*ab)
 
 
 @pytest.mark.parametrize("name", ["4_1", "5_2", "6_1"])

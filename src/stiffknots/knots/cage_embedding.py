@@ -71,22 +71,31 @@ class CageSpec:
     sb: int = 1
 
 
-def two_box_conway(conway: str | None) -> tuple[int, int] | None:
-    """The two twist counts of a KnotInfo Conway notation ``'[ab]'`` (e.g. '[32]' → (3, 2)).
+def two_box_conway(conway: str | None, crossings: int | None = None) -> tuple[int, int] | None:
+    """The two twist counts of a KnotInfo Conway notation of two boxes (e.g. '[32]' → (3, 2),
+    '[10 2]' → (10, 2)).
+
+    KnotInfo writes ``[ab]`` without a separator when both counts are single digits and
+    separates them by a space otherwise ('[10 2]', '[8 4]', '[6 6]' at 12 crossings). The
+    digits of an unseparated body are ambiguous for a one-box knot of ten or more crossings:
+    '[11]' is the (2, 11) torus knot, not [1 1]; with ``crossings`` (the knot's crossing
+    number) the counts must add up to it, which tells these apart.
 
     Returns ``None`` for any other notation (one box, three or more boxes, non-rational).
-    Single digits only: KnotInfo writes ``[ab]`` without separators for a, b ≤ 9.
     """
     if not conway:
         return None
     s = conway.strip()
     if not (s.startswith("[") and s.endswith("]")):
         return None
-    body = s[1:-1]
-    if len(body) != 2 or not body.isdigit():
+    parts = s[1:-1].split()
+    if len(parts) == 1 and len(parts[0]) == 2 and parts[0].isdigit():
+        a, b = int(parts[0][0]), int(parts[0][1])
+    elif len(parts) == 2 and all(p.isdigit() for p in parts):
+        a, b = int(parts[0]), int(parts[1])
+    else:
         return None
-    a, b = int(body[0]), int(body[1])
-    if a < 1 or b < 1:
+    if a < 1 or b < 1 or (crossings is not None and a + b != crossings):
         return None
     return a, b
 
@@ -228,7 +237,7 @@ def cage_spec_for(knot) -> CageSpec:
     EmbeddingError
         If the knot is not in the two-box family (the message gives its Conway notation).
     """
-    ab = two_box_conway(knot.conway_notation)
+    ab = two_box_conway(knot.conway_notation, knot.crossing_number)
     if ab is None:
         raise EmbeddingError(
             f"{knot.name} has Conway notation {knot.conway_notation or 'unknown'}; a 4-fold cage "

@@ -72,7 +72,7 @@ def families_of(knot: Any) -> list[str]:
     out = []
     if knot.n_equals_i:
         out.append("n=i")
-    if two_box_conway(knot.conway_notation) is not None:
+    if two_box_conway(knot.conway_notation, knot.crossing_number) is not None:
         out.append("4C")
     if knot.name in EIGHTY_FAMILY:
         out.append("80")
