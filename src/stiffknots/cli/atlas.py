@@ -207,7 +207,8 @@ def atlas(
         help="Results database: stored replicas are reused (resume), new ones added.")
     ] = "results/stiffknots.db",
     scheduler: Annotated[str | None, typer.Option(
-        help="Address of a running Dask scheduler (tcp://host:8786); default: a local "
+        help="Address of a running Dask scheduler (tcp://host:8786) or its scheduler "
+             "file (--scheduler-file of stiffknots-dask scheduler); default: a local "
              "cluster of one worker process per core.")] = None,
     workers: Annotated[int | None, typer.Option(
         help="Worker processes of the local cluster (default: one per core).")] = None,

@@ -95,12 +95,24 @@ def local_workers(workers: int | None = None) -> int:
 
 
 def scheduler_address(scheduler: str) -> str:
-    """The address of a Dask scheduler (``tcp://host:port``, ``host:port``), checked for its
-    form only; UserInputError otherwise."""
+    """The address of a Dask scheduler (``tcp://host:port``, ``host:port``), or the address a
+    scheduler file names (``dask scheduler --scheduler-file FILE``: JSON with ``address``),
+    checked for its form only; UserInputError otherwise."""
+    import json
+    from pathlib import Path
+
     address = str(scheduler).strip()
+    path = Path(address).expanduser()
+    if not _ADDRESS.match(address) and path.is_file():
+        try:
+            address = str(json.loads(path.read_text())["address"]).strip()
+        except (OSError, ValueError, KeyError, TypeError):
+            raise UserInputError(f"--scheduler {scheduler!r} is a file but not a Dask "
+                                 "scheduler file (JSON with an 'address', written by "
+                                 "stiffknots-dask scheduler --scheduler-file FILE)") from None
     if not _ADDRESS.match(address):
         raise UserInputError(f"--scheduler must be a scheduler address such as "
-                             f"tcp://host:8786, got {scheduler!r}")
+                             f"tcp://host:8786 or a scheduler file, got {scheduler!r}")
     return address
 
 
