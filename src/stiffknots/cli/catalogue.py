@@ -4,13 +4,24 @@
 from __future__ import annotations
 
 import math
+import time
 from typing import Annotated
 
 import typer
 from rich.table import Table
 
 from stiffknots._version import __version__
-from stiffknots.cli.app import JsonOpt, UserError, dump, fmt, out, prepare_folder
+from stiffknots.cli.app import (
+    JsonOpt,
+    UserError,
+    count,
+    dump,
+    err,
+    floats,
+    fmt,
+    out,
+    prepare_folder,
+)
 
 
 def knot(name: Annotated[str, typer.Argument(help="Knot name: 4_1, 4.1, K11a1, T(2,3) ...")],
@@ -146,6 +157,80 @@ def families(
               fmt(tot["fraction"], 3))
     out.print(t)
     out.print("n = i knots: " + ", ".join(d["knots"]))
+
+
+def starts(
+    max_crossings: Annotated[int, typer.Option(help="Largest crossing number (3..13).")] = 12,
+    crossings: Annotated[str | None, typer.Option(
+        help="Only these crossing numbers, comma-separated (e.g. 11,12).")] = None,
+    families: Annotated[str, typer.Option(
+        help="Start families, comma-separated: braid, cage, eighty.")] = "braid,cage,eighty",
+    beads: Annotated[int, typer.Option(help="Beads N of every chain.", parser=count)] = 150,
+    workers: Annotated[int, typer.Option(help="Processes side by side.", parser=count)] = 2,
+    json_: JsonOpt = False,
+) -> None:
+    """Build every knot's starting chains — the braid closure, the 4-fold cage where the knot
+    has two boxes, the 80 where its family has it — at N beads and verify each one's knot
+    type (HOMFLY-PT and the invariants that break its ties); list any that cannot be built
+    or is another knot, with the reason. Built once and kept in the cache (the 2,977 knots
+    through 12 crossings: about 10 CPU minutes the first time, seconds after). See
+    docs/methods/search.md#the-start-table."""
+    from stiffknots.knots.catalogue import MAX_CROSSINGS
+    from stiffknots.knots.start_table import FAMILIES, start_table, summarise
+
+    if not 3 <= max_crossings <= MAX_CROSSINGS:
+        raise UserError(f"--max-crossings must be between 3 and {MAX_CROSSINGS}, "
+                        f"got {max_crossings}")
+    cs = None
+    if crossings is not None:
+        vals = floats(crossings, "--crossings")
+        if any(v != int(v) or not 3 <= v <= max_crossings for v in vals):
+            raise UserError(f"--crossings: whole numbers between 3 and --max-crossings "
+                            f"({max_crossings}), got {crossings!r}")
+        cs = sorted({int(v) for v in vals})
+    fams = [f.strip() for f in families.split(",") if f.strip()]
+    bad = [f for f in fams if f not in FAMILIES]
+    if bad or not fams:
+        raise UserError(f"--families {families!r}: choose from {', '.join(FAMILIES)}")
+    if not 20 <= beads <= 100_000:
+        raise UserError(f"--beads must be between 20 and 100000, got {beads}")
+    if not 1 <= workers <= 64:
+        raise UserError(f"--workers must be between 1 and 64, got {workers}")
+    t0 = time.perf_counter()
+
+    def progress(done, total, label):
+        err.print(f"{time.strftime('%H:%M:%S')} chunk {done}/{total} ({label}), "
+                  f"{time.perf_counter() - t0:.0f} s", highlight=False)
+
+    rows = start_table(max_crossings, crossings=cs, families=fams, n_beads=beads,
+                       workers=workers, progress=None if json_ else progress)
+    summ = summarise(rows)
+    d = {"max_crossings": max_crossings, "crossings": cs, "families": fams, "n_beads": beads,
+         "version": __version__, "wall_seconds": time.perf_counter() - t0, **summ,
+         "rows": [r.as_dict() for r in rows]}
+    d["by_crossing"] = {str(c): v for c, v in summ["by_crossing"].items()}
+    if json_:
+        dump(d)
+        return
+    t = Table(title=f"starting chains at N = {beads}: built and verified")
+    for col in ("n_c", "knots", *fams, "another family", "failed"):
+        t.add_column(col, justify="right")
+    for c, v in summ["by_crossing"].items():
+        fam = v["families"]
+        t.add_row(str(c), str(v["knots"]),
+                  *[f"{fam.get(f, {}).get('verified', 0)}"
+                    + (f" (+{fam[f]['tie']} tie)" if fam.get(f, {}).get("tie") else "")
+                    for f in fams],
+                  str(v["another_family"]),
+                  str(sum(fam.get(f, {}).get("failed", 0) for f in fams)))
+    out.print(t)
+    for r in summ["failed"]:
+        out.print(f"failed: {r['knot']} {r['family']}: {r['reason']}", highlight=False)
+    for r in summ["ties"]:
+        out.print(f"tie: {r['knot']} {r['family']}: {r['reason']}", highlight=False)
+    out.print(f"{summ['knots']} knots at N = {beads}; {len(summ['failed'])} failed; building "
+              f"and naming took {summ['seconds']:.0f} s summed over the rows (kept in the "
+              "cache: the next run reads them)", highlight=False)
 
 
 def version(json_: JsonOpt = False) -> None:

@@ -48,6 +48,7 @@ for _name, _command in (
         ("knot", catalogue.knot),
         ("elastica", catalogue.elastica),
         ("families", catalogue.families),
+        ("starts", catalogue.starts),
         ("identify", curves.identify),
         ("resample", curves.resample),
         ("relax", curves.relax),
