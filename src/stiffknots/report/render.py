@@ -28,6 +28,7 @@ best_view
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -106,19 +107,39 @@ def _perpendicular(t: np.ndarray) -> np.ndarray:
     return _unit(a - (a @ t) * t)
 
 
-def _rotate(v: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Rotate ``v`` by the smallest rotation taking unit vector ``a`` to unit vector ``b``."""
-    axis = np.cross(a, b)
-    s = np.linalg.norm(axis)
-    c = float(np.clip(a @ b, -1.0, 1.0))
+def _rotate(v, a, b) -> tuple[float, float, float]:
+    """Rotate ``v`` by the smallest rotation taking unit vector ``a`` to unit vector ``b``
+    (Rodrigues' formula on plain floats: the frame is transported bead by bead, and numpy's
+    per-call cost on 3-vectors made this loop most of the time of an atlas page)."""
+    v0, v1, v2 = v
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    x0, x1, x2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0  # axis = a × b
+    s = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    c = min(1.0, max(-1.0, a0 * b0 + a1 * b1 + a2 * b2))
     if s < 1e-12:
         if c > 0:
-            return v
+            return v0, v1, v2
         # antiparallel: rotate by pi about any axis perpendicular to a
-        k = _perpendicular(a)
-        return 2.0 * (v @ k) * k - v
-    k = axis / s
-    return v * c + np.cross(k, v) * s + k * (k @ v) * (1.0 - c)
+        k0, k1, k2 = _perpendicular(np.array(a, dtype=float))
+        d = 2.0 * (v0 * k0 + v1 * k1 + v2 * k2)
+        return d * k0 - v0, d * k1 - v1, d * k2 - v2
+    k0, k1, k2 = x0 / s, x1 / s, x2 / s
+    kv = (k0 * v0 + k1 * v1 + k2 * v2) * (1.0 - c)
+    return (v0 * c + (k1 * v2 - k2 * v1) * s + k0 * kv,
+            v1 * c + (k2 * v0 - k0 * v2) * s + k1 * kv,
+            v2 * c + (k0 * v1 - k1 * v0) * s + k2 * kv)
+
+
+def _transported(v, a, b) -> tuple[float, float, float]:
+    """``v`` rotated from tangent ``a`` to tangent ``b``, made exactly perpendicular to ``b``
+    and unit."""
+    w0, w1, w2 = _rotate(v, a, b)
+    b0, b1, b2 = b
+    d = w0 * b0 + w1 * b1 + w2 * b2
+    w0, w1, w2 = w0 - d * b0, w1 - d * b1, w2 - d * b2
+    r = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    return w0 / r, w1 / r, w2 / r
 
 
 @dataclass(frozen=True)
@@ -216,17 +237,14 @@ def tube_mesh(coords, radius: float = DEFAULT_RADIUS, *, closed: bool = True,
     t = np.where((ns > 1e-9)[:, None], s / np.maximum(ns, 1e-300)[:, None], u_out)
 
     # parallel transport of the normal along the tangents
-    normals = np.empty((n, 3))
-    normals[0] = _perpendicular(t[0])
+    tl = t.tolist()
+    frame = [tuple(_perpendicular(t[0]).tolist())]
     for k in range(1, n):
-        v = _rotate(normals[k - 1], t[k - 1], t[k])
-        v = v - (v @ t[k]) * t[k]
-        normals[k] = v / np.linalg.norm(v)
+        frame.append(_transported(frame[-1], tl[k - 1], tl[k]))
+    normals = np.array(frame)
     if closed:
         # close the frame: transport once more back to bead 0 and spread the mismatch angle
-        v = _rotate(normals[-1], t[-1], t[0])
-        v = v - (v @ t[0]) * t[0]
-        v /= np.linalg.norm(v)
+        v = np.array(_transported(frame[-1], tl[-1], tl[0]))
         phi = np.arctan2(np.cross(normals[0], v) @ t[0], normals[0] @ v)
         arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
         total = arc[-1] + np.linalg.norm(x[0] - x[-1])
