@@ -358,6 +358,26 @@ def thin_stage(d: dict) -> list[str]:
     return out
 
 
+def atlas_page(d: dict) -> list[str]:
+    m, pr = d["browser"]["median"], d["projected"]
+    return [
+        f"{d['knots']:,} synthetic rows (every prime knot through 12 crossings), "
+        f"{d['page_rows']} to a page; headless chromium, medians of "
+        f"{len(d['browser']['runs'])} loads.", "",
+        "| measure | value |", "| --- | --- |",
+        f"| index.html | {d['index_bytes'] / 1e6:.2f} MB, written in {d['index_write_s']:.1f} s |",
+        f"| index opens (load event; DOMContentLoaded) | {m['load_s']:.2f} s; "
+        f"{m['dom_content_loaded_s']:.2f} s |",
+        f"| ε–n² plot drawn, after the load | {m['plot_after_load_s']:.2f} s |",
+        f"| filter keystroke / sort / page turn | {m['filter_s']:.2f} / {m['sort_s']:.2f} / "
+        f"{m['page_turn_s']:.2f} s |",
+        f"| a knot page / a thumbnail (mean of {d['sample']}) | "
+        f"{d['knot_page_bytes_mean'] / 1e3:.0f} kB / {d['thumbnail_bytes_mean'] / 1e3:.1f} kB |",
+        f"| every page, thumbnail and plotly.js ({d['knots']:,} knots) | "
+        f"{pr['total_bytes'] / 1e6:.0f} MB, written in about {pr['write_s'] / 60:.0f} min |",
+    ]
+
+
 def thin_deep(d: dict) -> list[str]:
     def num(x, f=".3f"):
         return "—" if x is None else format(x, f)
@@ -433,6 +453,10 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "Dask, both routes, the thin-limit grounds and the cost",
      "stiffknots atlas --max-crossings 8 --models tube --thin --json > RUN.json; python "
      "bench/thin_stage.py DB --run RUN.json", thin_stage),
+    ("atlas_page", "The atlas's pages at 2,977 knots",
+     "the index of every prime knot through 12 crossings in headless chromium (open, filter, "
+     "sort, page), the size of every page and thumbnail", "python bench/atlas_page.py",
+     atlas_page),
     ("thin_deep", "Thin-stage branches continued below the ladder",
      "stored branches followed to w/L = 6.25·10⁻⁵ at their own N (and one at 2N): where the "
      "Monte Carlo extrapolation meets the structure route, and where it stops short",

@@ -161,6 +161,23 @@ def synthetic_knots(n_beads: int = 150) -> list[dict]:
     ]
 
 
+def synthetic_catalogue_rows(max_crossings: int = 12) -> list[dict]:
+    """One synthetic row per prime knot through ``max_crossings`` (2,977 through 12): the six
+    knots of :func:`synthetic_knots` in turn, renamed."""
+    import copy
+
+    from stiffknots.knots.catalogue import catalogue
+
+    base = synthetic_knots()
+    rows = []
+    for j, k in enumerate(kn for kn in catalogue(max_crossings) if kn.crossing_number >= 3):
+        d = copy.deepcopy(base[j % len(base)])
+        d["name"], d["crossing_number"] = k.name, k.crossing_number
+        d.pop("thin", None)
+        rows.append(d)
+    return rows
+
+
 def synthetic_families() -> dict:
     """A family-statistics table in the ``families`` schema of the atlas."""
     return {"title": "Ground-state shape families",

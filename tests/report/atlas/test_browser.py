@@ -15,7 +15,13 @@ import re
 import numpy as np
 import pytest
 
-from atlas_support import chromium_context, find_chromium, synthetic_families, synthetic_knots
+from atlas_support import (
+    chromium_context,
+    find_chromium,
+    synthetic_catalogue_rows,
+    synthetic_families,
+    synthetic_knots,
+)
 from stiffknots.report.atlas import write_atlas
 
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install "
@@ -263,4 +269,73 @@ def test_the_thin_limit_column_and_the_branch_diagram(page, atlas):
     sel.select_option(label=thin)
     p.wait_for_timeout(300)
     assert "thin-limit ground other" in p.inner_text("#view-caption")
+    page.check()
+
+
+# -- an atlas of every prime knot through 12 crossings (#39) -------------------------------------
+
+
+@pytest.fixture(scope="module")
+def big_atlas(tmp_path_factory):
+    """The index of 2,977 knots (the knot pages stubbed: they are one per knot and tested
+    above; writing 2,977 of them takes minutes)."""
+    import stiffknots.report.atlas.pages as pages
+
+    out = tmp_path_factory.mktemp("atlas-2977")
+    keep = pages.knot_page
+    pages.knot_page = lambda *a, **k: "<!DOCTYPE html><title>stub</title>"
+    try:
+        rows = synthetic_catalogue_rows()
+        index = write_atlas(out, rows, families=synthetic_families(),
+                            title="2,977 synthetic rows", thumbnails=False)
+    finally:
+        pages.knot_page = keep
+    return index, rows
+
+
+def test_index_of_every_knot_through_12_crossings_pages_sorts_and_filters(page, big_atlas):
+    from stiffknots.report.atlas.index_page import PAGE_ROWS
+
+    index, rows = big_atlas
+    names = [r["name"] for r in rows]
+    assert len(names) == 2977
+    p = page.page
+    p.goto(index.as_uri())
+    assert len(_visible(p)) == PAGE_ROWS and _visible(p)[0] == "3_1"
+    assert p.locator("#count").inner_text() == f"2977 of 2977 knots match; 1–{PAGE_ROWS} shown"
+    assert p.locator("#page-info").inner_text() == "page 1 of 15"
+    assert p.locator("#page-prev").is_disabled()
+    p.click("#page-next")
+    assert _visible(p) == names[PAGE_ROWS:2 * PAGE_ROWS]
+    assert p.locator("#count").inner_text().endswith(f"{PAGE_ROWS + 1}–{2 * PAGE_ROWS} shown")
+
+    # sort by crossing number, descending: the 12-crossing knots first, across every page
+    col = _column(p, "nc")  # n<sub>c</sub>
+    p.locator("#knots thead th").nth(col).locator("button").click()
+    p.locator("#knots thead th").nth(col).locator("button").click()
+    assert p.locator("#page-info").inner_text() == "page 1 of 15"  # a new order starts over
+    assert set(_column_values(p, col)) == {"12"}
+    p.select_option("#page-size", "0")                 # all on one page
+    assert len(_visible(p)) == 2977
+    assert [int(v) for v in _column_values(p, col)] == sorted(
+        (r["crossing_number"] for r in rows), reverse=True)
+    p.select_option("#page-size", str(PAGE_ROWS))
+
+    # the filter searches every row, not the page shown
+    p.fill("#filter", "11n_")
+    n11 = sum(1 for n in names if n.startswith("11n_"))
+    assert p.locator("#count").inner_text() == f"{n11} of 2977 knots shown"  # one page
+    assert all(n.startswith("11n_") for n in _visible(p)) and len(_visible(p)) == n11
+    p.fill("#filter", "12a_")
+    n12 = sum(1 for n in names if n.startswith("12a_"))
+    assert p.locator("#count").inner_text() == (f"{n12} of 2977 knots match; 1–{PAGE_ROWS} "
+                                                 "shown")
+    p.fill("#filter", "")
+
+    # the plot follows the table, one point per knot of the model shown
+    p.wait_for_selector("#eps-plot.js-plotly-plot .main-svg", timeout=60_000)
+    n_points = p.evaluate("""() => document.getElementById('eps-plot').data
+        .filter(t => t.meta && t.meta.model && t.visible !== false)
+        .reduce((s, t) => s + t.x.length, 0)""")
+    assert n_points == 2977
     page.check()

@@ -2,8 +2,17 @@
   "use strict";
   var table = document.getElementById("knots");
   var tbody = table.tBodies[0];
+  // every row: the first page in the table, the others waiting in a template (never laid
+  // out until a page shows them: an index of thousands of knots opens as fast as a small one)
   var rows = Array.prototype.slice.call(tbody.rows);
+  var more = document.getElementById("knots-more");
+  if (more) rows = rows.concat(Array.prototype.slice.call(more.content.children));
   rows.forEach(function (r, k) { r.setAttribute("data-order", k); });
+  var matched = rows.slice(), pageNo = 0;
+  var pager = document.getElementById("pager");
+  var sizeSel = document.getElementById("page-size");
+  var pageInfo = document.getElementById("page-info");
+  var prevBtn = document.getElementById("page-prev"), nextBtn = document.getElementById("page-next");
   var filterBox = document.getElementById("filter");
   var shapeSel = document.getElementById("shape-filter");
   var modelSel = document.getElementById("model");
@@ -34,7 +43,37 @@
       if (th.hasAttribute("aria-sort"))
         th.setAttribute("aria-sort", k === col ? (dir > 0 ? "ascending" : "descending") : "none");
     });
-    rows.slice().sort(compare).forEach(function (r) { tbody.appendChild(r); });
+    rows.sort(compare);
+    applyFilter();
+  }
+  function pageSize() {
+    var v = sizeSel ? parseInt(sizeSel.value, 10) : 0;
+    return v > 0 ? v : rows.length || 1;
+  }
+  function render() {
+    var size = pageSize(), pages = Math.max(1, Math.ceil(matched.length / size));
+    pageNo = Math.min(Math.max(pageNo, 0), pages - 1);
+    var from = pageNo * size, shown = matched.slice(from, from + size);
+    var frag = document.createDocumentFragment();
+    shown.forEach(function (r) { r.hidden = false; frag.appendChild(r); });
+    tbody.replaceChildren(frag);
+    var text = matched.length + " of " + rows.length + " knots shown";
+    if (pages > 1)
+      text = matched.length + " of " + rows.length + " knots match; " + (from + 1) + "–" +
+        (from + shown.length) + " shown";
+    countEl.textContent = text;
+    if (pager) {
+      // a table that fits one page of the default size needs no pager
+      pager.hidden = pages === 1 && rows.length <= parseInt(pager.getAttribute("data-rows"), 10);
+      pageInfo.textContent = "page " + (pageNo + 1) + " of " + pages;
+      prevBtn.disabled = pageNo === 0;
+      nextBtn.disabled = pageNo >= pages - 1;
+    }
+  }
+  if (pager) {
+    prevBtn.addEventListener("click", function () { pageNo--; render(); });
+    nextBtn.addEventListener("click", function () { pageNo++; render(); });
+    sizeSel.addEventListener("change", function () { pageNo = 0; render(); });
   }
   heads.forEach(function (th, k) {
     var b = th.querySelector("button");
@@ -43,18 +82,17 @@
       sortBy(k, sortCol === k ? -sortDir : 1);
     });
   });
-  function applyFilter() {
+  function applyFilter(keepPage) {
     var q = filterBox.value.trim().toLowerCase();
     var s = shapeSel ? shapeSel.value : "";
-    var m = model(), shown = 0;
-    rows.forEach(function (r) {
+    var m = model();
+    matched = rows.filter(function (r) {
       var text = r.getAttribute("data-search-" + m) || r.getAttribute("data-search") || "";
       var shape = r.getAttribute("data-shape-" + m) || "";
-      var ok = (!q || text.indexOf(q) >= 0) && (!s || shape === s);
-      r.hidden = !ok;
-      if (ok) shown++;
+      return (!q || text.indexOf(q) >= 0) && (!s || shape === s);
     });
-    countEl.textContent = shown + " of " + rows.length + " knots shown";
+    if (keepPage !== true) pageNo = 0;
+    render();
   }
   filterBox.addEventListener("input", applyFilter);
   if (shapeSel) shapeSel.addEventListener("change", applyFilter);
@@ -68,18 +106,34 @@
       return !(t.meta && t.meta.model) || t.meta.model === model();
     });
   }
-  if (window.Plotly && plot) {
-    Plotly.newPlot(plot, FIG.data, FIG.layout, CONFIG);
+  var drawn = false;
+  function draw() {
+    if (!window.Plotly || !plot) return;
+    Plotly.newPlot(plot, FIG.data, FIG.layout, CONFIG).then(function () {
+      drawn = true;
+      Plotly.restyle(plot, {visible: visibility()});
+    });
     plot.on("plotly_click", function (ev) {
       var p = ev.points && ev.points[0];
       if (p && p.customdata && p.customdata[5]) window.location.href = p.customdata[5];
     });
   }
+  // plotly.js (3.5 MB) is loaded once the table is shown, so that the table is read and
+  // sorted at once and the plot follows
+  function loadPlotly() {
+    if (window.Plotly) { draw(); return; }
+    var js = document.createElement("script");
+    js.src = "plotly.min.js";
+    js.onload = draw;
+    document.head.appendChild(js);
+  }
+  if (document.readyState === "complete") loadPlotly();
+  else window.addEventListener("load", loadPlotly);
   if (modelSel) modelSel.addEventListener("change", function () {
     document.body.setAttribute("data-model", modelSel.value);
     if (sortCol >= 0) sortBy(sortCol, sortDir);
-    applyFilter();
-    if (window.Plotly && plot) Plotly.restyle(plot, {visible: visibility()});
+    else applyFilter(true);
+    if (drawn) Plotly.restyle(plot, {visible: visibility()});
   });
   applyFilter();
 })();

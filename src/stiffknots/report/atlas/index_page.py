@@ -19,7 +19,12 @@ from stiffknots.report.atlas.markup import (
 from stiffknots.report.atlas.schema import KnotRow, ModelRow, natural_key
 from stiffknots.report.text import segment_distance_text
 
-__all__ = ["index_page"]
+__all__ = ["PAGE_ROWS", "index_page"]
+
+#: Rows of the knots' table shown at once (the page's default; the reader picks 50 … all).
+#: The rows after the first page wait in a ``<template>``: never laid out until shown, so an
+#: index of thousands of knots opens as fast as one of a few hundred.
+PAGE_ROWS = 200
 
 
 def _model_css(models: list[ModelRow] | list[tuple[str, str]]) -> str:
@@ -49,7 +54,7 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
     statistics (module :mod:`stiffknots.report.atlas`)."""
     extra: dict = {}
     body_model = dict(models).get(default, "") if default else ""
-    parts = [page_head(title, "", _model_css(models)),
+    parts = [page_head(title, "", _model_css(models), plotly=False),
              f'<body data-model="{esc(body_model)}">\n<main>\n<h1>{esc(title)}</h1>\n']
     n_with = sum(1 for k in knots if any(m.ground for m in k.models.values()))
     parts.append(f'<p class="lede">{len(knots)} knots, {n_with} with a computed ground state'
@@ -116,7 +121,9 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
     parts.append('<div class="table-wrap"><table id="knots" class="atlas">\n<thead><tr>'
                  + "".join(head)
                  + "</tr></thead>\n<tbody>\n")
-    for k in knots:
+    for j, k in enumerate(knots):
+        if j == PAGE_ROWS:
+            parts.append('</tbody>\n</table></div>\n<template id="knots-more">\n')
         href = f"knots/{esc(k.slug)}.html"
         attrs = [f'data-name="{esc(k.name)}"']
         for mname, mslug in models:
@@ -194,7 +201,17 @@ def index_page(knots: list[KnotRow], models: list[tuple[str, str]], default: str
         dv = f' data-v="{esc(fam.lower())}"' if fam else ""
         cells.append(f"<td{dv}>{esc(fam) if fam else '—'}</td>")
         parts.append(f"<tr {' '.join(attrs)}>" + "".join(cells) + "</tr>\n")
-    parts.append("</tbody>\n</table></div>\n")
+    parts.append("</template>\n" if len(knots) > PAGE_ROWS else "</tbody>\n</table></div>\n")
+    sizes = "".join(f'<option value="{v}"{" selected" if v == PAGE_ROWS else ""}>'
+                    f'{v or "all"}</option>' for v in (50, PAGE_ROWS, 1000, 0))
+    parts.append(f'<nav id="pager" class="pager" aria-label="pages of the table" '
+                 f'data-rows="{PAGE_ROWS}"'
+                 + (' hidden' if len(knots) <= PAGE_ROWS else "") + '>\n'
+                 '<button type="button" id="page-prev">‹ previous</button>\n'
+                 '<span id="page-info"></span>\n'
+                 '<button type="button" id="page-next">next ›</button>\n'
+                 f'<label>rows per page <select id="page-size">{sizes}</select></label>\n'
+                 "</nav>\n")
 
     # ε against n²
     parts.append('<h2 id="eps-title">ε against n²</h2>\n<div id="eps-plot" class="plot"></div>\n'

@@ -51,13 +51,15 @@ def json_script(obj: Any) -> str:
     return s.replace("<", "\\u003c")  # "<" occurs only inside JSON strings
 
 
-def page_head(title: str, prefix: str, extra_css: str) -> str:
+def page_head(title: str, prefix: str, extra_css: str, plotly: bool = True) -> str:
     """The start of a page up to ``</head>``: the style sheet inline, plotly.js from
-    ``prefix`` (the folder of the atlas, relative to the page)."""
+    ``prefix`` (the folder of the atlas, relative to the page) unless ``plotly`` is False (the
+    index loads it itself once its table is shown)."""
+    script = f"<script src=\"{prefix}plotly.min.js\"></script>\n" if plotly else ""
     return (
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
         f"<title>{esc(title)}</title>\n<link rel=\"icon\" href=\"data:,\">\n"
         f"<style>\n{asset('atlas.css')}\n{extra_css}</style>\n"
-        f"<script src=\"{prefix}plotly.min.js\"></script>\n</head>\n"
+        f"{script}</head>\n"
     )
