@@ -362,3 +362,22 @@ def test_a_langevin_bead_search_is_its_own_ensemble_and_leaves_the_tube_alone():
     assert job.settings["schedule"]["kind"] == "langevin" and job.settings["moves"] == 20_000
     x = np.asarray(r.coords)
     assert np.allclose(np.linalg.norm(np.roll(x, -1, 0) - x, axis=1), 1.0, atol=1e-6)
+
+
+def test_resolve_knots_by_crossing_number_and_sample():
+    n11 = resolve_knots(crossings=[11])
+    assert len(n11) == 552 and all(n.startswith("11") for n in n11)
+    assert len(resolve_knots(crossings=[11, 12])) == 552 + 2176
+    assert resolve_knots(["3_1", "11a_1", "12n_1"], crossings=[11, 12]) == ["11a_1", "12n_1"]
+    assert resolve_knots(max_crossings=10, crossings=[3, 4]) == ["3_1", "4_1"]
+    s = resolve_knots(crossings=[11, 12], sample=100, seed=3)
+    assert len(s) == 100 == len(set(s))
+    assert s == resolve_knots(crossings=[11, 12], sample=100, seed=3)  # resumable
+    assert s != resolve_knots(crossings=[11, 12], sample=100, seed=4)
+    assert set(s) <= set(resolve_knots(crossings=[11, 12]))
+    assert resolve_knots(["3_1", "4_1"], sample=5) == ["3_1", "4_1"]  # fewer: all of them
+    for bad in ({"crossings": [2]}, {"crossings": [14]}, {"crossings": []},
+                {"max_crossings": 10, "crossings": [11]},
+                {"crossings": [11], "sample": 0}):
+        with pytest.raises(UserInputError):
+            resolve_knots(**bad)

@@ -30,6 +30,7 @@ from stiffknots.cli.app import (
     count,
     dump,
     err,
+    floats,
     out,
     prepare_file,
 )
@@ -191,6 +192,12 @@ def atlas(
     ] = None,
     knots: Annotated[str | None, typer.Option(
         help="Only these knots, separated by commas (3_1,4_1,5_2).")] = None,
+    crossings: Annotated[str | None, typer.Option(
+        help="Only the knots of these crossing numbers, separated by commas (11,12); alone, "
+             "every prime knot of them.")] = None,
+    sample: Annotated[int | None, typer.Option(
+        help="A random sample of N of the knots chosen, drawn with --seed (the same command "
+             "draws the same sample, so it resumes).", parser=count)] = None,
     models: Annotated[str, typer.Option(
         help="Exclusion models, separated by commas: bead (the paper's rule d = 1/√2) and/or "
              "tube (diameter --w).")] = "bead,tube",
@@ -263,9 +270,9 @@ def atlas(
     from stiffknots.studies.atlas import run_atlas
     from stiffknots.sweeps import budget_of, parse_models, resolve_knots
 
-    if max_crossings is None and knots is None:
-        raise UserError("give --max-crossings K (every prime knot through K crossings) or "
-                        "--knots 3_1,4_1,...")
+    if max_crossings is None and knots is None and crossings is None:
+        raise UserError("give --max-crossings K (every prime knot through K crossings), "
+                        "--crossings 11,12 or --knots 3_1,4_1,...")
     # every input is checked before any work; the knot names (the catalogue: seconds) last
     knot_list = _knot_list(knots)
     mods = parse_models(models, w=w)
@@ -297,7 +304,13 @@ def atlas(
     elif thin_states is not None or thin_budget != "small":
         raise UserError("--thin-budget and --thin-states set the thin stage: add --thin")
     scheduler = cluster_options(scheduler, workers)
-    names = resolve_knots(knot_list, max_crossings)
+    cross = None
+    if crossings is not None:
+        vals = floats(crossings, "--crossings")
+        if any(v != int(v) for v in vals):
+            raise UserError(f"--crossings must be whole numbers, got {crossings!r}")
+        cross = [int(v) for v in vals]
+    names = resolve_knots(knot_list, max_crossings, crossings=cross, sample=sample, seed=seed)
     from pathlib import Path
 
     # a sweep writes --db: checked writable (a read-only or immutable file lost the first

@@ -128,8 +128,9 @@ class SweepJob:
         return self.knot, self.model.exclusion
 
 
-def resolve_knots(knots: Iterable[str] | None = None, max_crossings: int | None = None
-                  ) -> list[str]:
+def resolve_knots(knots: Iterable[str] | None = None, max_crossings: int | None = None, *,
+                  crossings: Iterable[int] | None = None, sample: int | None = None,
+                  seed: int = 0) -> list[str]:
     """The catalogue names of a sweep, in table order, each once.
 
     Parameters
@@ -139,34 +140,60 @@ def resolve_knots(knots: Iterable[str] | None = None, max_crossings: int | None 
     max_crossings : int, optional
         Every prime knot with 3 ≤ n_c ≤ ``max_crossings`` (3..13); with ``knots``, only those
         of them with n_c ≤ ``max_crossings``.
+    crossings : iterable of int, optional
+        Only the knots of these crossing numbers (without ``knots`` or ``max_crossings``:
+        every prime knot of them).
+    sample : int, optional
+        A random sample of this many of the knots (all of them when there are fewer), drawn
+        with ``seed``: the same arguments give the same sample, so a sampled sweep resumes.
+    seed : int
+        Seed of the sample.
 
     Raises
     ------
     UserInputError
-        An unknown knot, the unknot, a knot above ``max_crossings``, no knot at all.
+        An unknown knot, the unknot, a knot above ``max_crossings``, a crossing number out of
+        range, no knot at all.
     """
+    import random
+
     from stiffknots.knots.catalogue import MAX_CROSSINGS, catalogue, get_knot
     from stiffknots.store import knot_sort_key
 
     if max_crossings is not None:
         max_crossings = V.integer("max_crossings", max_crossings, 3, MAX_CROSSINGS)
+    want = None
+    if crossings is not None:
+        want = sorted({V.integer("crossings", c, 3, max_crossings or MAX_CROSSINGS)
+                       for c in crossings})
+        if not want:
+            raise InvalidParameter("crossings", "", "at least one crossing number")
+    if sample is not None:
+        sample = V.integer("sample", sample, 1, 100_000)
     if knots is None:
-        if max_crossings is None:
+        if max_crossings is None and want is None:
             raise InvalidParameter("knots", None, "a list of knot names, or max_crossings")
-        return [k.name for k in catalogue(max_crossings) if k.crossing_number >= 3]
-    names = []
-    for text in knots:
-        k = get_knot(str(text).strip())
-        if k.crossing_number < 3:
-            raise UserInputError(f"{text}: the unknot has no knotted ground state to sweep "
-                                 "(its minimum is the circle, ε = 2π²)")
-        if max_crossings is not None and k.crossing_number > max_crossings:
-            raise UserInputError(f"{k.name} has {k.crossing_number} crossings, more than "
-                                 f"max_crossings = {max_crossings}")
-        names.append(k.name)
+        top = max_crossings if max_crossings is not None else max(want)
+        names = [k.name for k in catalogue(top) if k.crossing_number >= 3
+                 and (want is None or k.crossing_number in want)]
+    else:
+        names = []
+        for text in knots:
+            k = get_knot(str(text).strip())
+            if k.crossing_number < 3:
+                raise UserInputError(f"{text}: the unknot has no knotted ground state to "
+                                     "sweep (its minimum is the circle, ε = 2π²)")
+            if max_crossings is not None and k.crossing_number > max_crossings:
+                raise UserInputError(f"{k.name} has {k.crossing_number} crossings, more than "
+                                     f"max_crossings = {max_crossings}")
+            if want is None or k.crossing_number in want:
+                names.append(k.name)
+        names = list(dict.fromkeys(names))
     if not names:
         raise InvalidParameter("knots", "", "at least one knot name")
-    return sorted(dict.fromkeys(names), key=knot_sort_key)
+    if sample is not None and sample < len(names):
+        names = random.Random(seed).sample(names, sample)
+    return sorted(names, key=knot_sort_key)
 
 
 def plan_sweep(knots: Sequence[str], models: Sequence[Width], budget: Budget,
