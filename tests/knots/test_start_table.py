@@ -85,3 +85,16 @@ def test_starts_command(tmp_path):
         q = subprocess.run([sys.executable, "-m", "stiffknots.cli", "starts", *bad],
                            capture_output=True, text=True, timeout=600, env=env)
         assert q.returncode == 2 and q.stderr.strip().startswith("error:"), q.stderr
+
+
+def test_a_braid_too_long_for_n_is_laid_out_by_a_cyclic_rotation():
+    """12a_1202's word (18 letters on 7 strands) does not fit in 150 beads as given; a cyclic
+    rotation of it — a conjugate braid, the same closure — does, and the chain is 12a_1202."""
+    from stiffknots.knots.embedding import D_MIN, DEFAULT_GAP, _embed_checked, embed_braid
+
+    k = get_knot("12a_1202")
+    assert _embed_checked(list(k.braid_word), 7, 150, D_MIN, DEFAULT_GAP) is None
+    x = embed_braid(k.braid_word, n_strands=7, n_beads=150)
+    assert x.shape == (150, 3)
+    r = st.check_start(k, "braid")
+    assert r.status == "verified" and r.found == "12a_1202"

@@ -519,7 +519,9 @@ def embed_braid(
     ------
     EmbeddingError
         If the word is not a knot (closure with several components), or ``n_beads`` is too
-        small; the message gives the smallest ``n_beads`` that works.
+        small for the word and for each of its cyclic rotations (conjugate braids, the same
+        closure, tried in turn when the word as given does not fit); the message gives the
+        smallest ``n_beads`` that works for the word as given.
     """
     word = parse_braid(word)
     n = _strands(word, n_strands)
@@ -531,14 +533,21 @@ def embed_braid(
     elif n > 1 and n_strands is not None:
         raise EmbeddingError(f"the empty braid on {n} strands is an unlink of {n} circles")
     x = _embed_checked(word, n, n_beads, d_min, gap)
+    # a word too long for n_beads: its cyclic rotations are conjugate braids with the same
+    # closure, laid out otherwise (12a_1202's word needs 152 beads, its 16th rotation 146)
+    for r in range(1, len(word) if x is None else 0):
+        x = _embed_checked(word[r:] + word[:r], n, n_beads, d_min, gap)
+        if x is not None:
+            break
     if x is None:
         nmin = minimal_beads(word, n, d_min, gap=gap)
         if nmin <= n_beads:  # pragma: no cover - non-monotone corner case
             nmin = minimal_beads(word, n, d_min, gap=gap, start=n_beads + 1)
         raise EmbeddingError(
             f"{n_beads} beads are too few to embed braid {word} on {n} strands with "
-            f"non-adjacent beads ≥ {d_min:.4g} apart; the least number of beads that works is "
-            f"{nmin}"
+            f"non-adjacent beads ≥ {d_min:.4g} apart, nor any of its cyclic rotations (the "
+            f"same closure); the least number of beads that works is {nmin} (for the word as "
+            "given)"
         )
     if seed is not None:
         rng = np.random.default_rng(seed)
