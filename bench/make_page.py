@@ -378,6 +378,36 @@ def atlas_page(d: dict) -> list[str]:
     ]
 
 
+def sample_12(d: dict) -> list[str]:
+    lo, hi = d["converged_interval"]
+    out = [f"{d['sampled']} knots drawn (seed {d['seed']}), {d['with_results']} with results, "
+           f"{d['settled']} settled (converged, or every replica and leg of the "
+           f"{d['budget']} budget run); {d['width']}.", "",
+           "| crossings | sampled | settled | converged | CPU s a knot (mean / median / max) |",
+           "| --- | --- | --- | --- | --- |"]
+    for c, v in d["by_crossings"].items():
+        cpu = ("—" if v["cpu_mean"] is None else
+               f"{v['cpu_mean']:.0f} / {v['cpu_median']:.0f} / {v['cpu_max']:.0f}")
+        out.append(f"| {c} | {v['sampled']} | {v['settled']} | {v['converged']} | {cpu} |")
+    out += ["", f"Converged: {d['converged']} of {d['settled']} settled "
+            f"({100 * d['converged'] / max(1, d['settled']):.0f} %; 95 % interval "
+            f"{100 * lo:.0f}–{100 * hi:.0f} %)."]
+    if d["n_eq_i"]:
+        out.append("n = i knots: " + "; ".join(
+            f"{r['knot']} (i = {r['i']}) {r['shape']}"
+            + ("" if r["multiplicity"] is None else f"({r['multiplicity']})")
+            + f" ε = {r['epsilon']:.2f}" + ("" if r["settled"] else " (in flight)")
+            for r in d["n_eq_i"]) + ".")
+    p = d.get("projection")
+    if p:
+        out.append(f"Projection, all {p['knots']:,} knots through 12 crossings: "
+                   f"{p['cpu_hours']:.0f} CPU hours — {p['wall_hours_2_cores']:.0f} h on 2 "
+                   f"cores, {p['wall_hours_64_cores']:.1f} h on a 64-core Dask cluster"
+                   + (f" (crossing numbers {', '.join(map(str, p['assumed']))}: no settled "
+                      "knot, the largest mean measured)" if p.get("assumed") else "") + ".")
+    return out
+
+
 def thin_deep(d: dict) -> list[str]:
     def num(x, f=".3f"):
         return "—" if x is None else format(x, f)
@@ -453,6 +483,10 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "Dask, both routes, the thin-limit grounds and the cost",
      "stiffknots atlas --max-crossings 8 --models tube --thin --json > RUN.json; python "
      "bench/thin_stage.py DB --run RUN.json", thin_stage),
+    ("sample_12", "A sample of the knots of 11 and 12 crossings",
+     "converged %, CPU s a knot and the n = i knots of a seeded sample at the default budget "
+     "(tube), and the projection for all 2,977 knots",
+     "python bench/sample_12.py DB STORED.json", sample_12),
     ("atlas_page", "The atlas's pages at 2,977 knots",
      "the index of every prime knot through 12 crossings in headless chromium (open, filter, "
      "sort, page), the size of every page and thumbnail", "python bench/atlas_page.py",
