@@ -18,7 +18,7 @@ invariants that break its ties through 12 crossings — which must give the knot
   with the reason.
 
 Rows are computed in chunks of :data:`CHUNK` knots of one crossing number and kept in the
-disk cache (:mod:`stiffknots._diskcache`) under the package version and the sources they
+disk cache (``stiffknots._diskcache``) under the package version and the sources they
 depend on: the table is built once per installation, a run stopped half-way keeps its
 finished chunks, and an edited embedding or identification builds it anew.
 """
