@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from stiffknots.knots import start_table as st
@@ -98,3 +99,37 @@ def test_a_braid_too_long_for_n_is_laid_out_by_a_cyclic_rotation():
     assert x.shape == (150, 3)
     r = st.check_start(k, "braid")
     assert r.status == "verified" and r.found == "12a_1202"
+
+
+def test_braid_start_of_12a_32_is_admissible_for_the_tube():
+    """12a_32's braid closure at the default strand spacing keeps beads 0.91 apart but
+    segments only 0.695 where strands cross — the tube model refused it; a wider spacing
+    keeps every segment pair ≥ 1/√2 apart, and the chain is 12a_32."""
+    from stiffknots.knots.embedding import (
+        D_MIN,
+        DEFAULT_GAP,
+        _embed_checked,
+        embed_braid,
+        embedding_report,
+    )
+
+    k = get_knot("12a_32")
+    plain = _embed_checked(list(k.braid_word), k.braid_strands, 150, D_MIN, DEFAULT_GAP)
+    assert embedding_report(plain).min_segment_distance < D_MIN
+    x = embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=150)
+    rep = embedding_report(x)
+    assert rep.min_segment_distance >= D_MIN and rep.min_bead_distance >= D_MIN
+    assert rep.max_bond_error < 1e-10
+    assert st.check_start(k, "braid").status == "verified"
+
+
+@pytest.mark.parametrize("name", ["3_1", "5_2", "8_19", "10_123"])
+def test_braid_starts_through_10_crossings_keep_their_layout(name):
+    """Through 10 crossings every braid start was admissible for the tube already: the same
+    chain as the word laid out at the default spacing."""
+    from stiffknots.knots.embedding import D_MIN, DEFAULT_GAP, _embed_checked, embed_braid
+
+    k = get_knot(name)
+    plain = _embed_checked(list(k.braid_word), k.braid_strands, 150, D_MIN, DEFAULT_GAP)
+    assert np.array_equal(embed_braid(k.braid_word, n_strands=k.braid_strands, n_beads=150),
+                          plain)
