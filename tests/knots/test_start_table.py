@@ -68,8 +68,11 @@ def test_table_is_cached_and_summarised(tmp_path, monkeypatch):
     s = st.summarise(rows)
     assert s["knots"] == 3 and s["failed"] == [] and s["another_family"] == 2
     assert s["by_crossing"][11]["families"]["cage"] == {"verified": 0, "tie": 0, "absent": 1,
-                                                        "failed": 0}
+                                                        "failed": 0, "tube_ok": 0}
     assert s["by_crossing"][12]["families"]["cage"]["verified"] == 1
+    # every verified chain here is admissible for the tube (segments ≥ 1/√2 apart)
+    assert all(r.segment_distance >= 2 ** -0.5 for r in rows if r.status == "verified")
+    assert s["not_tube"] == [] and s["by_crossing"][12]["families"]["braid"]["tube_ok"] == 1
 
 
 def test_starts_command(tmp_path):

@@ -217,15 +217,24 @@ def starts(
         t.add_column(col, justify="right")
     for c, v in summ["by_crossing"].items():
         fam = v["families"]
-        t.add_row(str(c), str(v["knots"]),
-                  *[f"{fam.get(f, {}).get('verified', 0)}"
-                    + (f" (+{fam[f]['tie']} tie)" if fam.get(f, {}).get("tie") else "")
-                    for f in fams],
-                  str(v["another_family"]),
+
+        def cell(f, fam=fam):
+            g = fam.get(f, {})
+            text = str(g.get("verified", 0))
+            if g.get("verified") and g.get("tube_ok") != g.get("verified"):
+                text += f" ({g['tube_ok']} tube)"
+            return text + (f" (+{g['tie']} tie)" if g.get("tie") else "")
+
+        t.add_row(str(c), str(v["knots"]), *[cell(f) for f in fams], str(v["another_family"]),
                   str(sum(fam.get(f, {}).get("failed", 0) for f in fams)))
+    t.caption = ("verified chains; (k tube): k of them also admissible for the tube model "
+                 "(segments ≥ 1/√2 apart), where not all are")
     out.print(t)
     for r in summ["failed"]:
         out.print(f"failed: {r['knot']} {r['family']}: {r['reason']}", highlight=False)
+    for r in summ["not_tube"]:
+        out.print(f"not for the tube: {r['knot']} {r['family']}: segments "
+                  f"{r['segment_distance']:.4f} apart (< 1/√2)", highlight=False)
     for r in summ["ties"]:
         out.print(f"tie: {r['knot']} {r['family']}: {r['reason']}", highlight=False)
     out.print(f"{summ['knots']} knots at N = {beads}; {len(summ['failed'])} failed; building "

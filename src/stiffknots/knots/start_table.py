@@ -65,6 +65,10 @@ class StartCheck:
         chain was built.
     seconds : float
         Wall seconds to build and name the chain.
+    segment_distance : float or None
+        Smallest distance between two segments sharing no bead (bond units): the chain is
+        admissible for the tube model of diameter w when it is ≥ w (1/√2 by default). None
+        when no chain was built.
     """
 
     knot: str
@@ -74,6 +78,7 @@ class StartCheck:
     reason: str
     found: str | None
     seconds: float
+    segment_distance: float | None = None
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -116,7 +121,7 @@ def check_start(knot, family: str, n_beads: int = 150) -> StartCheck:
         For an unknown family.
     """
     from stiffknots.knots.catalogue import get_knot
-    from stiffknots.knots.embedding import EmbeddingError
+    from stiffknots.knots.embedding import EmbeddingError, embedding_report
     from stiffknots.knots.identify import identify_details, normalize_name
 
     if family not in FAMILIES:
@@ -125,9 +130,11 @@ def check_start(knot, family: str, n_beads: int = 150) -> StartCheck:
         knot = get_knot(knot)
     t0 = time.perf_counter()
 
+    seg = None
+
     def row(status: str, reason: str, found: str | None = None) -> StartCheck:
         return StartCheck(knot.name, knot.crossing_number, family, status, reason, found,
-                          time.perf_counter() - t0)
+                          time.perf_counter() - t0, seg)
 
     try:
         x = _build(knot, family, int(n_beads))
@@ -136,6 +143,7 @@ def check_start(knot, family: str, n_beads: int = 150) -> StartCheck:
         return row("failed" if family == "braid" else "absent", str(e))
     except Exception as e:  # noqa: BLE001 — a defect of a builder: listed, not hidden
         return row("failed", f"{type(e).__name__}: {e}")
+    seg = float(embedding_report(x).min_segment_distance)
     d = identify_details(x)
     want = normalize_name(knot.name)
     by = ", ".join(d.decided_by) or "HOMFLY-PT"
@@ -236,9 +244,10 @@ def start_table(max_crossings: int = 12, *, crossings: Iterable[int] | None = No
     return rows
 
 
-def summarise(rows: Iterable[StartCheck]) -> dict:
-    """Counts by crossing number and family: knots, verified, tie, absent, failed; the knots
-    with a verified start of a family other than the braid; and the failed rows."""
+def summarise(rows: Iterable[StartCheck], w: float = 2 ** -0.5) -> dict:
+    """Counts by crossing number and family: knots, verified, tie, absent, failed, and the
+    verified chains admissible for a tube of diameter ``w`` (``tube_ok``); the knots with a
+    verified start of a family other than the braid; and the failed rows."""
     rows = list(rows)
     by_c: dict[int, dict] = {}
     other: dict[str, bool] = {}
@@ -246,8 +255,11 @@ def summarise(rows: Iterable[StartCheck]) -> dict:
         c = by_c.setdefault(r.crossings, {"knots": set(), "families": {}})
         c["knots"].add(r.knot)
         f = c["families"].setdefault(r.family, {"verified": 0, "tie": 0, "absent": 0,
-                                                 "failed": 0})
+                                                 "failed": 0, "tube_ok": 0})
         f[r.status] += 1
+        if r.status == "verified" and r.segment_distance is not None \
+                and r.segment_distance >= w - 1e-9:
+            f["tube_ok"] += 1
         if r.family != "braid":
             other[r.knot] = other.get(r.knot, False) or r.status == "verified"
     out = {}
@@ -261,6 +273,8 @@ def summarise(rows: Iterable[StartCheck]) -> dict:
         "by_crossing": out,
         "another_family": sum(1 for k in knots if other.get(k)),
         "failed": [r.as_dict() for r in rows if r.status == "failed"],
+        "not_tube": [r.as_dict() for r in rows if r.status == "verified"
+                     and r.segment_distance is not None and r.segment_distance < w - 1e-9],
         "ties": [r.as_dict() for r in rows if r.status == "tie"],
         "seconds": sum(r.seconds for r in rows),
     }
