@@ -44,11 +44,10 @@ def test_the_cage_read_from_a_chain_is_the_4_fold_cage():
     assert r.name == "2 point-braids" and (r.arcs, r.junctions) == (4, 2)
 
 
-@pytest.mark.slow
 def test_the_4_1_flat_state_solved_at_w_0_lies_below_the_cage():
     """4_1's `other` (a point-braid and two double points), read from its chain at
     w/L = 0.00025 (N = 173, read at d = 0.5): a minimum at 126.1586 — below ε*_4C
-    (docs/thin-limit.md); about 20 s."""
+    (docs/thin-limit.md); Newton from the chain converges, so no SLSQP search (2 s, not 150)."""
     with warnings.catch_warnings():      # a w = 0.043 chain read at d = 0.5, on purpose
         warnings.simplefilter("ignore")
         r = solve_chain(_chain("4_1_tube_other_thin"), 0.5)
@@ -56,6 +55,19 @@ def test_the_4_1_flat_state_solved_at_w_0_lies_below_the_cage():
     assert r.epsilon == pytest.approx(126.158594, abs=2e-5) and r.error < 1e-6
     assert r.keeps_knot and r.minimum
     assert r.epsilon < EPS_4C - 0.3
+    assert r.details["newton_first"] and not r.details["budget_hit"]
+
+
+def test_newton_from_the_chain_and_the_search_reach_the_same_cage():
+    """Newton first (the route's default) and SLSQP first from the same chain: one minimum."""
+    from stiffknots.theory.structures import solve_structure
+
+    p = structure_problem(_chain("4_1_tube_cage"), W)
+    fast = solve_structure(p, (16, 32, 64), orders=2, newton_first=True)
+    slow = solve_structure(p, (16, 32, 64), orders=2)
+    assert fast.coarse["newton_first"] and fast.coarse["nit"] == 0
+    assert not slow.coarse["newton_first"] and slow.coarse["nit"] > 10
+    assert fast.epsilon == pytest.approx(slow.epsilon, abs=1e-9)
 
 
 @pytest.mark.parametrize("name, words", [("3_1_seed1_r1", "line-braid of multiplicity 2"),

@@ -41,6 +41,22 @@ def test_an_other_state_without_a_translatable_graph_has_no_route():
     assert r["epsilon"] is None and r["note"].startswith("no structure route")
 
 
+def test_a_route_stopped_at_its_budget_gives_no_number(monkeypatch):
+    """The coarse search stopped before a minimum (here: a budget of 0 s, SLSQP first): what
+    Newton reached from there is no structure's energy, so the route reports none, and why."""
+    import functools
+
+    import stiffknots.analysis.structure_route as sr
+
+    monkeypatch.setattr(sr, "solve_chain", functools.partial(
+        sr.solve_chain, coarse_budget_s=0.0, newton_first=False))
+    x = np.load(DATA / "analysis" / "4_1_tube_cage_thin.npy")
+    r = structure_route(_branch(x, "other", None))
+    assert r["epsilon"] is None and r["minimum"] is False
+    assert r["note"].startswith("no structure route: the coarse search stopped at its 0 CPU s "
+                                "budget without a converged minimum")
+
+
 @pytest.mark.parametrize("kw", [dict(budget="huge"), dict(states=0), dict(seed=-1)])
 def test_bad_input_is_refused_before_any_work(kw):
     with pytest.raises(InvalidParameter):

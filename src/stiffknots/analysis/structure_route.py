@@ -33,6 +33,13 @@ Richardson error of 0.5); from the same state's chain at w/L = 0.00025 it reache
 126.1586 (no negative mode, error 2e-10). The route therefore starts from a state's thinnest
 chain, and :attr:`ChainStructure.minimum` says whether it reached a converged minimum.
 
+Since the start is the state's own chain, Newton is tried first at the coarse level
+(``newton_first``): where it converges to a point with no negative mode, the dense SLSQP search
+is skipped (4_1's `other` from its thinnest chain: 166 → 1.8 CPU s, the same 126.158594);
+where it does not, SLSQP runs from the start within :data:`COARSE_BUDGET_S` CPU seconds, then
+Newton polishes what it reached; a solution that is not a converged minimum is reported as
+such, whatever stopped it.
+
 The solution must keep the knot: at w = 0 strands meet only at the junctions. :func:`solve_chain`
 measures the smallest distance between points of two different arcs farther than ``near``
 (default 0.03 L) from every junction and flags a solution where two arcs came within ``touch``
@@ -49,7 +56,14 @@ import numpy as np
 
 from stiffknots.analysis.structure import analyse_structure, tangents
 
-__all__ = ["StructureRouteError", "ChainStructure", "structure_problem", "solve_chain"]
+__all__ = ["COARSE_BUDGET_S", "StructureRouteError", "ChainStructure", "structure_problem",
+           "solve_chain"]
+
+#: CPU seconds of the coarse SLSQP search of one chain's graph when Newton from the chain
+#: does not converge: SLSQP is dense, its cost grows as the cube of the unknowns (7_6's
+#: 10-arc graph cost most of that knot's 5,094 CPU s in the 8-crossing thin stage and ended
+#: at a saddle).
+COARSE_BUDGET_S = 120.0
 
 
 class StructureRouteError(ValueError):
@@ -253,6 +267,7 @@ def _arcs_apart(lv: Any, n_arcs: int, n_nodes: int, near: float) -> float:
 
 def solve_chain(coords: Any, d: float, *, Ks: tuple[int, ...] = (16, 32, 64, 128),
                 near: float = 0.03, touch: float = 1e-3, name: str = "chain",
+                coarse_budget_s: float | None = COARSE_BUDGET_S, newton_first: bool = True,
                 **analyse_kw: Any) -> ChainStructure:
     """The structure route for a chain: :func:`structure_problem`, solved
     (:func:`~stiffknots.theory.structures.solve_structure`) and checked (module docstring).
@@ -269,6 +284,12 @@ def solve_chain(coords: Any, d: float, *, Ks: tuple[int, ...] = (16, 32, 64, 128
         distance check (strands meet there by construction).
     touch : float, default 1e-3
         Two arcs closer than this (/ L) away from their ends: the solution is flagged.
+    coarse_budget_s : float or None, default :data:`COARSE_BUDGET_S`
+        CPU seconds for the coarse SLSQP search when Newton from the chain does not converge
+        (module docstring); ``details["budget_hit"]`` says when it stopped there.
+    newton_first : bool, default True
+        Newton from the chain before the coarse search (module docstring); False: the search
+        first, as before (for comparisons).
 
     Returns
     -------
@@ -282,7 +303,8 @@ def solve_chain(coords: Any, d: float, *, Ks: tuple[int, ...] = (16, 32, 64, 128
     from stiffknots.theory.structures import solve_structure
 
     prob = structure_problem(coords, d, name=name, **analyse_kw)
-    res = solve_structure(prob, Ks, stability_K=Ks[0])
+    res = solve_structure(prob, Ks, stability_K=Ks[0], newton_first=newton_first,
+                          coarse_budget_s=coarse_budget_s)
     lv = res.best
     dmin = _arcs_apart(lv, len(prob.arcs), len(prob.node_names), near)
     return ChainStructure(
@@ -291,7 +313,10 @@ def solve_chain(coords: Any, d: float, *, Ks: tuple[int, ...] = (16, 32, 64, 128
         keeps_knot=bool(dmin >= touch),
         negative_modes=int((res.stability or {}).get("negative", 0)),
         details={"Ks": list(res.Ks), "epsilon_K": [float(e) for e in res.epsilons],
-                 "seconds": float(res.seconds), "tension": float(lv.tension)},
+                 "seconds": float(res.seconds), "tension": float(lv.tension),
+                 "newton_first": bool(res.coarse.get("newton_first", False)),
+                 "budget_hit": bool(res.coarse.get("budget_hit", False)),
+                 "coarse_budget_s": coarse_budget_s},
         curves=[{"points": np.asarray(lv.positions(p), dtype=float),
                  "multiplicity": int(prob.arcs[p].multiplicity)}
                 for p in range(len(prob.arcs))])

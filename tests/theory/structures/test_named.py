@@ -66,3 +66,20 @@ def test_cage_other_starts_find_the_same_minimum(kw):
     ref = st.solve_structure(st.four_fold_cage(), (16, 32, 64), orders=2)
     res = st.solve_structure(st.four_fold_cage(**kw), (16, 32, 64), orders=2)
     assert res.epsilon == pytest.approx(ref.epsilon, abs=1e-8)
+
+
+def test_newton_first_from_a_rough_start_falls_back_to_the_search():
+    """The cage's rough start is no stationary point Newton reaches: with ``newton_first`` the
+    coarse search still runs and finds the same minimum."""
+    ref = st.solve_structure(st.four_fold_cage(), (8, 16), orders=1)
+    res = st.solve_structure(st.four_fold_cage(), (8, 16), orders=1, newton_first=True)
+    assert not res.coarse["newton_first"] and res.coarse["nit"] > 10
+    assert res.epsilon == pytest.approx(ref.epsilon, abs=1e-9)
+
+
+def test_the_coarse_search_stops_at_its_time_budget():
+    """Past ``coarse_budget_s`` SLSQP stops after its iteration and no escape is tried (the
+    same start without a budget takes > 10 iterations: the test above)."""
+    res = st.solve_structure(st.four_fold_cage(), (8, 16), orders=1, coarse_budget_s=0.0)
+    assert res.coarse["budget_hit"] and res.coarse["nit"] == 1
+    assert res.coarse["saddle_escapes"] == 0 and not res.coarse["success"]

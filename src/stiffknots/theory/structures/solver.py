@@ -520,8 +520,14 @@ def _newton(prob: DiscreteProblem, x: np.ndarray, lam: np.ndarray | None = None,
     return x, lam, {"iterations": len(hist), "residual": res}
 
 
-def _slsqp(prob: DiscreteProblem, x0: np.ndarray, maxiter: int = 600) -> tuple[np.ndarray, dict]:
-    """Minimise at the coarsest level with SLSQP from a rough start (analytic gradients)."""
+def _slsqp(prob: DiscreteProblem, x0: np.ndarray, maxiter: int = 600,
+           deadline: float | None = None) -> tuple[np.ndarray, dict]:
+    """Minimise at the coarsest level with SLSQP from a rough start (analytic gradients);
+    stopped after the iteration that passes ``deadline`` (a :func:`time.process_time` time)."""
+
+    def stop(_r):
+        if deadline is not None and time.process_time() > deadline:
+            raise StopIteration
 
     def fun(x):
         return prob.energy_grad(x)
@@ -533,8 +539,11 @@ def _slsqp(prob: DiscreteProblem, x0: np.ndarray, maxiter: int = 600) -> tuple[n
     for i in prob.l_idx:
         bounds[i] = (1e-3, 1.0)
     r = minimize(fun, x0, jac=True, constraints=[cons], method="SLSQP", bounds=bounds,
-                 options={"maxiter": maxiter, "ftol": 1e-14})
-    return r.x, {"success": bool(r.success), "message": str(r.message), "nit": int(r.nit)}
+                 options={"maxiter": maxiter, "ftol": 1e-14}, callback=stop)
+    timed_out = deadline is not None and time.process_time() > deadline
+    return r.x, {"success": bool(r.success) and not timed_out,
+                 "message": "stopped at the time budget" if timed_out else str(r.message),
+                 "nit": int(r.nit), "budget_hit": timed_out}
 
 
 # --------------------------------------------------------------------------------------------
@@ -630,7 +639,8 @@ class StructureResult:
 
 def solve_structure(structure: StructureProblem, Ks: Sequence[int] = (16, 32, 64, 128, 256),
                     *, coarse_K: int | None = None, orders: int = 3,
-                    stability_K: int | None = None) -> StructureResult:
+                    stability_K: int | None = None, newton_first: bool = False,
+                    coarse_budget_s: float | None = None) -> StructureResult:
     """Minimise a structure's energy (eq. (17)) at fixed length and extrapolate ``K -> inf``.
 
     Parameters
@@ -645,6 +655,12 @@ def solve_structure(structure: StructureProblem, Ks: Sequence[int] = (16, 32, 64
         Even powers ``K^-2, K^-4, ...`` removed by Richardson extrapolation.
     stability_K : int, optional
         Level at which to compute the spectrum of the reduced Hessian (dense; keep it small).
+    newton_first : bool
+        Try Newton from the start before SLSQP at the coarse level (for starts close to the
+        structure, such as a chain's own geometry; :func:`_coarse_minimum`).
+    coarse_budget_s : float, optional
+        CPU seconds allowed to the coarse SLSQP search (default: no limit); past it the
+        search stops and ``coarse["budget_hit"]`` says so (:func:`_coarse_minimum`).
 
     Returns
     -------
@@ -661,7 +677,8 @@ def solve_structure(structure: StructureProblem, Ks: Sequence[int] = (16, 32, 64
     prob = DiscreteProblem(structure, kc)
     x = prob.x_from_curves([a.guess for a in structure.arcs], structure.node_guess,
                            structure.dir_guess)
-    x, lam, coarse = _coarse_minimum(prob, x)
+    x, lam, coarse = _coarse_minimum(prob, x, newton_first=newton_first,
+                                     budget_s=coarse_budget_s)
     # refine up to Ks[0]
     while prob.K < Ks[0]:
         fine = DiscreteProblem(structure, 2 * prob.K)
@@ -705,28 +722,55 @@ def _reduced_spectrum(prob: DiscreteProblem, x: np.ndarray, lam: np.ndarray
     return w, V, Z
 
 
-def _coarse_minimum(prob: DiscreteProblem, x: np.ndarray, max_escapes: int = 4
+def _coarse_minimum(prob: DiscreteProblem, x: np.ndarray, max_escapes: int = 4,
+                    newton_first: bool = False, budget_s: float | None = None
                     ) -> tuple[np.ndarray, np.ndarray, dict]:
     """SLSQP + Newton at the coarse level, leaving saddles along negative curvature.
 
     A start with a symmetry can lead SLSQP to a saddle that keeps it; if the reduced Hessian
     has a negative eigenvalue, the state is pushed along that eigenvector and minimised again.
+
+    With ``newton_first`` (a start close to the structure, e.g. a chain's own geometry), Newton
+    is tried first: if it converges (KKT residual ≤ 1e-10) to a point whose reduced Hessian has
+    no negative eigenvalue, that point is a strict local minimum of the discrete problem — the
+    answer SLSQP from the same start would polish to — and the dense SLSQP (whose cost grows
+    as the cube of the unknowns: minutes for 10 arcs) is skipped; otherwise the usual path
+    runs from the start.
+
+    ``budget_s`` bounds the CPU seconds (of this process) of the SLSQP searches (all escapes together): past
+    it the search stops after its current iteration, Newton polishes what it has, no further
+    escape is tried and ``budget_hit`` says so — the result is then whatever stationary point
+    Newton reaches, its spectrum reported as usual (a saddle or an unconverged level is
+    flagged downstream, never called a minimum).
     """
+    deadline = None if budget_s is None else time.process_time() + budget_s
     escapes = 0
     nit = 0
     start_eps = float(prob.energy_grad(x)[0])
+    if newton_first:
+        xn, lam, newton = _newton(prob, x, maxiter=15)   # quadratic: a near start needs < 10
+        if newton["residual"] <= 1e-10:
+            w, V, Z = _reduced_spectrum(prob, xn, lam)
+            if w[0] >= -1e-8 * np.max(np.abs(w)):
+                return xn, lam, {
+                    "success": True, "message": "Newton from the start", "K": prob.K,
+                    "nit": 0, "newton_first": True, "budget_hit": False,
+                    "start_epsilon": start_eps,
+                    "epsilon": float(prob.energy_grad(xn)[0]),
+                    "residual": newton["residual"], "saddle_escapes": 0,
+                    "lowest_reduced_eigenvalue": float(w[0])}
     while True:
-        x, info = _slsqp(prob, x)
+        x, info = _slsqp(prob, x, deadline=deadline)
         nit += info["nit"]
         x, lam, newton = _newton(prob, x)
         w, V, Z = _reduced_spectrum(prob, x, lam)
-        if w[0] >= -1e-8 * np.max(np.abs(w)) or escapes >= max_escapes:
+        if w[0] >= -1e-8 * np.max(np.abs(w)) or escapes >= max_escapes or info["budget_hit"]:
             break
         v = Z @ V[:, 0]
         x = x + 0.1 * v / np.max(np.abs(v))
         prob.renormalise(x)
         escapes += 1
-    info.update(K=prob.K, nit=nit, start_epsilon=start_eps,
+    info.update(K=prob.K, nit=nit, newton_first=False, start_epsilon=start_eps,
                 epsilon=float(prob.energy_grad(x)[0]),
                 residual=newton["residual"], saddle_escapes=escapes,
                 lowest_reduced_eigenvalue=float(w[0]))
