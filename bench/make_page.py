@@ -397,7 +397,18 @@ def sample_12(d: dict) -> list[str]:
             f"{r['knot']} (i = {r['i']}) {r['shape']}"
             + ("" if r["multiplicity"] is None else f"({r['multiplicity']})")
             + f" ε = {r['epsilon']:.2f}" + ("" if r["settled"] else " (in flight)")
+            + ("" if not r.get("cb_i_same_crossings") else
+               " (the CB({}) of the sample's other knots of its crossing number: "
+               "{:.2f}–{:.2f})".format(r["i"], *r["cb_i_same_crossings"]))
             for r in d["n_eq_i"]) + ".")
+    cbs = d.get("circular_braids") or []
+    if cbs:
+        out.append("Circular braids reached (lowest ε a knot): " + "; ".join(
+            f"CB({i}) at {c} crossings: " + ", ".join(
+                f"{x['knot']} {x['epsilon']:.2f}" for x in sorted(
+                    (x for x in cbs if x["i"] == i and x["crossings"] == c),
+                    key=lambda x: x["epsilon"]))
+            for i, c in sorted({(x["i"], x["crossings"]) for x in cbs})) + ".")
     p = d.get("projection")
     if p:
         out.append(f"Projection, all {p['knots']:,} knots through 12 crossings: "
@@ -438,6 +449,40 @@ def thin_deep(d: dict) -> list[str]:
                 "(corrected alike by k/N²); ✗: the routes differ by more than twice the error "
                 "and 0.5 %. Local exponents: log2 of the ratio of successive differences, widest "
                 "first."]
+    return out
+
+
+def structure_route(d: dict) -> list[str]:
+    def num(x, f=".4f"):
+        return "—" if x is None else format(x, f)
+
+    def ag(a):
+        return {True: "agree", False: "differ", None: "—"}[a]
+
+    s = d["summary"]
+    out = [f"{s['states']} states; compared {s['compared_now']}, agreeing {s['agree_now']} "
+           f"(stored: compared {s['compared_stored']}, agreeing {s['agree_stored']}); the "
+           f"chain's own graph solved for {s['graph_solved']}, a converged minimum for "
+           f"{s['graph_minima']}; route CPU s {s['cpu_seconds']:,.0f} in all, at most "
+           f"{s['cpu_seconds_max']:.0f} a state (the stored thin stage of these knots: "
+           f"{s['stored_knot_cpu_seconds']:,.0f} CPU s, branches included).", "",
+           "| knot, state | shape | branch ε* ± error | stored route | now: route | now: "
+           "routes | CPU s now | CPU s SLSQP first |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in d["rows"]:
+        st, nw = r["stored"], r["now"]
+        old = r.get("old")
+        out.append(
+            f"| {r['knot']}, {r['state']} | {r['shape']} | {num(r['epsilon_thin'])} ± "
+            f"{num(r['error'], '.2g')} | {num(st['structure_epsilon'])} ({ag(st['agree'])}) | "
+            f"{num(nw['structure_epsilon'])}"
+            + ("" if nw["minimum"] in (True, None) else " (no minimum)")
+            + f" | {ag(nw['agree'])} | {nw['cpu_seconds']:.1f} | "
+            + ("—" if old is None else f"{old['cpu_seconds']:.1f}") + " |")
+    out += ["", "Route: the state's graph solved at w = 0 (Newton from its chain first, the "
+                "coarse search within 120 CPU s) or the named structure of its class; "
+                "\"no minimum\": not compared. Routes agree within twice the branch's error "
+                "or 0.5 %."]
     return out
 
 
@@ -495,6 +540,10 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "stored branches followed to w/L = 6.25·10⁻⁵ at their own N (and one at 2N): where the "
      "Monte Carlo extrapolation meets the structure route, and where it stops short",
      "python bench/thin_deep.py DB --beads-x 2", thin_deep),
+    ("structure_route", "The structure route on every stored state, again",
+     "each state of a stored thin stage: its w = 0 structure route solved again from its "
+     "thinnest chain with today's solver, its CPU seconds and the comparison with its branch",
+     "python bench/structure_route.py DB --old 4_1:0,4_1:1,7_2:0", structure_route),
     ("small_jobs", "Small jobs", "wall and CPU seconds of short commands as typed (fresh "
      "processes, kernels cached)", "python bench/small_jobs.py", small_jobs),
     ("last_run", "The kernel and the time to the paper's energies (`make bench`)",

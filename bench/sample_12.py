@@ -52,6 +52,9 @@ def main(argv: list[str] | None = None) -> None:
     with sqlite3.connect(f"file:{a.db}?mode=ro", uri=True) as con:
         cpu = dict(con.execute("SELECT knot, sum(cpu_seconds) FROM replicas "
                                "WHERE exclusion = 'tube' GROUP BY knot"))
+        cb = con.execute("SELECT knot, multiplicity, min(epsilon) FROM replicas "
+                         "WHERE exclusion = 'tube' AND shape = 'CB' "
+                         "GROUP BY knot, multiplicity").fetchall()
     rows = []
     for k in d["knots"]:
         m = (k.get("models") or {}).get("tube")
@@ -72,9 +75,21 @@ def main(argv: list[str] | None = None) -> None:
                    "cpu_mean": statistics.mean(r["cpu_seconds"] for r in s) if s else None,
                    "cpu_median": statistics.median(r["cpu_seconds"] for r in s) if s else None,
                    "cpu_max": max((r["cpu_seconds"] for r in s), default=None)}
+    # every circular braid any replica reached: its energy at this width grows with the
+    # crossings its strands make, so an n = i knot's state is read against the CB(i) of knots
+    # of its own crossing number
+    crossings_of = {r["knot"]: r["crossings"] for r in rows}
+    circular = [{"knot": k, "crossings": crossings_of.get(k), "i": m, "epsilon": e}
+                for k, m, e in cb if m is not None]
+
+    def cb_range(c, i):
+        es = [x["epsilon"] for x in circular if x["crossings"] == c and x["i"] == i]
+        return [min(es), max(es)] if es else None
+
     n_eq_i = [{"knot": r["knot"], "i": r["i"], "shape": r["shape"],
                "multiplicity": r["multiplicity"], "epsilon": r["epsilon"],
                "cb_i": r["shape"] == "CB" and r["multiplicity"] == r["i"],
+               "cb_i_same_crossings": cb_range(r["crossings"], r["i"]),
                "converged": r["converged"], "settled": r["settled"]}
               for r in rows if r["n"] is not None and r["n"] == r["i"] and r["replicas"]]
     # the projection: mean CPU a settled knot by crossing number, times the catalogue's count
@@ -110,6 +125,7 @@ def main(argv: list[str] | None = None) -> None:
            "sampled": len(rows), "with_results": sum(1 for r in rows if r["replicas"]),
            "settled": len(settled), "converged": len(conv),
            "converged_interval": [lo, hi], "by_crossings": by_c, "n_eq_i": n_eq_i,
+           "circular_braids": circular,
            "projection": proj, "rows": rows}
     stable_path("sample_12").write_text(json.dumps(out, indent=1) + "\n")
     print(f"{len(rows)} knots sampled, {out['with_results']} with results, {len(settled)} "
@@ -124,7 +140,10 @@ def main(argv: list[str] | None = None) -> None:
         print(f"  n = i = {r['i']}: {r['knot']} {r['shape']}"
               f"{'' if r['multiplicity'] is None else '(' + str(r['multiplicity']) + ')'} "
               f"ε = {r['epsilon']:.2f}{' (CB(i))' if r['cb_i'] else ''}"
-              f"{'' if r['settled'] else ' (in flight)'}")
+              f"{'' if r['settled'] else ' (in flight)'}"
+              + ("" if r["cb_i_same_crossings"] is None else
+                 " — CB({}) of other knots of its crossing number: {:.2f}–{:.2f}".format(
+                     r["i"], *r["cb_i_same_crossings"])))
     if proj:
         print(f"projection: {proj['knots']} knots, {proj['cpu_hours']:.0f} CPU h: "
               f"{proj['wall_hours_2_cores']:.0f} h on 2 cores, "

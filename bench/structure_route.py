@@ -3,8 +3,8 @@ and what it costs, beside the stored answer.
 
     python bench/structure_route.py DB [--knots 4_1,7_6] [--old 4_1:0,7_6:0]
 
-For each state of ``DB``'s ``thin`` table (its newest run; the atlas's thin stage,
-``stiffknots atlas --thin``), the structure route
+For each state of ``DB``'s ``thin`` table (the newest row of each knot and state; the atlas's
+thin stage, ``stiffknots atlas --thin``), the structure route
 (:func:`stiffknots.studies.thin_states.structure_route`) is solved again from the state's stored
 thinnest chain and the stored points of its branch, with the code of this checkout (Newton from
 the chain first, the coarse search within its time budget), timed in CPU seconds of this
@@ -31,12 +31,11 @@ from benchmeta import run_meta, stable_path
 def _rows(db: str, knots: list[str] | None) -> list[dict]:
     con = sqlite3.connect(db)
     con.row_factory = sqlite3.Row
-    run = con.execute("SELECT run FROM thin ORDER BY id DESC LIMIT 1").fetchone()["run"]
     q = ("SELECT knot, state, name, epsilon, epsilon_thin, error, structure_epsilon, "
          "structure_name, agree, details, chain, beads_thin, cpu_seconds FROM thin "
-         "WHERE run = ? ORDER BY id")
+         "WHERE id IN (SELECT MAX(id) FROM thin GROUP BY knot, state) ORDER BY id")
     out = []
-    for r in con.execute(q, (run,)):
+    for r in con.execute(q):
         if knots and r["knot"] not in knots:
             continue
         d = dict(r)

@@ -737,9 +737,9 @@ def _coarse_minimum(prob: DiscreteProblem, x: np.ndarray, max_escapes: int = 4,
     as the cube of the unknowns: minutes for 10 arcs) is skipped; otherwise the usual path
     runs from the start.
 
-    ``budget_s`` bounds the CPU seconds (of this process) of the SLSQP searches (all escapes together): past
-    it the search stops after its current iteration, Newton polishes what it has, no further
-    escape is tried and ``budget_hit`` says so — the result is then whatever stationary point
+    ``budget_s`` bounds the CPU seconds (of this process) of the SLSQP searches, all escapes
+    together: past it the search stops after its current iteration, Newton polishes what it
+    has, no further escape is tried and ``budget_hit`` says so — the result is then whatever
     Newton reaches, its spectrum reported as usual (a saddle or an unconverged level is
     flagged downstream, never called a minimum).
     """
