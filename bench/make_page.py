@@ -397,6 +397,8 @@ def sample_12(d: dict) -> list[str]:
             f"{r['knot']} (i = {r['i']}) {r['shape']}"
             + ("" if r["multiplicity"] is None else f"({r['multiplicity']})")
             + f" ε = {r['epsilon']:.2f}" + ("" if r["settled"] else " (in flight)")
+            + ("" if r["cb_i"] or r.get("own_cb_i") is None else
+               f", its own CB({r['i']}) at {r['own_cb_i']:.2f}")
             + ("" if not r.get("cb_i_same_crossings") else
                " (the CB({}) of the sample's other knots of its crossing number: "
                "{:.2f}–{:.2f})".format(r["i"], *r["cb_i_same_crossings"]))

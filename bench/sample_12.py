@@ -82,14 +82,20 @@ def main(argv: list[str] | None = None) -> None:
     circular = [{"knot": k, "crossings": crossings_of.get(k), "i": m, "epsilon": e}
                 for k, m, e in cb if m is not None]
 
-    def cb_range(c, i):
-        es = [x["epsilon"] for x in circular if x["crossings"] == c and x["i"] == i]
+    def cb_range(knot, c, i):
+        es = [x["epsilon"] for x in circular
+              if x["crossings"] == c and x["i"] == i and x["knot"] != knot]
         return [min(es), max(es)] if es else None
+
+    def own_cb(knot, i):
+        es = [x["epsilon"] for x in circular if x["knot"] == knot and x["i"] == i]
+        return min(es) if es else None
 
     n_eq_i = [{"knot": r["knot"], "i": r["i"], "shape": r["shape"],
                "multiplicity": r["multiplicity"], "epsilon": r["epsilon"],
                "cb_i": r["shape"] == "CB" and r["multiplicity"] == r["i"],
-               "cb_i_same_crossings": cb_range(r["crossings"], r["i"]),
+               "cb_i_same_crossings": cb_range(r["knot"], r["crossings"], r["i"]),
+               "own_cb_i": own_cb(r["knot"], r["i"]),
                "converged": r["converged"], "settled": r["settled"]}
               for r in rows if r["n"] is not None and r["n"] == r["i"] and r["replicas"]]
     # the projection: mean CPU a settled knot by crossing number, times the catalogue's count
@@ -141,6 +147,8 @@ def main(argv: list[str] | None = None) -> None:
               f"{'' if r['multiplicity'] is None else '(' + str(r['multiplicity']) + ')'} "
               f"ε = {r['epsilon']:.2f}{' (CB(i))' if r['cb_i'] else ''}"
               f"{'' if r['settled'] else ' (in flight)'}"
+              + ("" if r["cb_i"] or r["own_cb_i"] is None else
+                 f" (its own CB({r['i']}) reached by a replica: {r['own_cb_i']:.2f})")
               + ("" if r["cb_i_same_crossings"] is None else
                  " — CB({}) of other knots of its crossing number: {:.2f}–{:.2f}".format(
                      r["i"], *r["cb_i_same_crossings"])))
