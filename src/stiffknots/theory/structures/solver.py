@@ -657,10 +657,10 @@ def solve_structure(structure: StructureProblem, Ks: Sequence[int] = (16, 32, 64
         Level at which to compute the spectrum of the reduced Hessian (dense; keep it small).
     newton_first : bool
         Try Newton from the start before SLSQP at the coarse level (for starts close to the
-        structure, such as a chain's own geometry; :func:`_coarse_minimum`).
+        structure, such as a chain's own geometry; ``_coarse_minimum``).
     coarse_budget_s : float, optional
         CPU seconds allowed to the coarse SLSQP search (default: no limit); past it the
-        search stops and ``coarse["budget_hit"]`` says so (:func:`_coarse_minimum`).
+        search stops and ``coarse["budget_hit"]`` says so (``_coarse_minimum``).
 
     Returns
     -------
