@@ -85,11 +85,7 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
     ``curves``: the w = 0 solution's arcs, at most 200 points each, when the chain's graph was
     solved).
     """
-    from stiffknots.analysis.structure_route import (
-        COARSE_BUDGET_S,
-        StructureRouteError,
-        solve_chain,
-    )
+    from stiffknots.analysis.structure_route import StructureRouteError, solve_chain
     from stiffknots.studies.thin_limit import CLASSIFY_D_MIN, structure_value
 
     say = say or (lambda _s: None)
@@ -124,19 +120,20 @@ def structure_route(branch: dict, *, say: Callable[[str], None] | None = None,
         + ("" if r.minimum else f" — not a converged minimum ({r.negative_modes} negative "
                                 f"mode(s))"))
     problem = None
+    stopped = not r.minimum and r.details.get("budget_hit", False)
     if not r.keeps_knot:
         problem = (f"its w = 0 solution brings two arcs within {r.min_arc_distance:.2g} L of "
                    "each other away from the junctions (strands may have passed)")
-    elif not r.minimum and r.details.get("budget_hit"):
-        budget = r.details.get("coarse_budget_s", COARSE_BUDGET_S)
-        problem = (f"the coarse search stopped at its {budget:g} CPU s budget "
+    elif stopped:
+        problem = (f"the coarse search stopped at its {r.details['coarse_budget_s']:g} CPU s "
+                   f"budget "
                    f"without a converged minimum ({r.negative_modes} negative mode(s))")
     elif not r.minimum:
         problem = (f"its w = 0 solution is not a converged minimum ({r.negative_modes} "
                    f"negative mode(s), error {r.error:.2g})")
     if problem is not None and named is not None:
         return use_named(f"the chain's graph ({r.name}, {r.arcs} arcs): {problem}")
-    if not r.minimum and r.details.get("budget_hit"):
+    if stopped:
         # what Newton reached from a stopped search is no structure's energy: no number
         out.update(name=r.name, method=f"the graph of the chain at w/L = {p['w_over_L']:g} "
                    f"({r.arcs} arcs, {r.junctions} junctions)", minimum=False,

@@ -732,10 +732,10 @@ def _coarse_minimum(prob: DiscreteProblem, x: np.ndarray, max_escapes: int = 4,
 
     With ``newton_first`` (a start close to the structure, e.g. a chain's own geometry), Newton
     is tried first: if it converges (KKT residual ≤ 1e-10) to a point whose reduced Hessian has
-    no negative eigenvalue, that point is a strict local minimum of the discrete problem — the
-    answer SLSQP from the same start would polish to — and the dense SLSQP (whose cost grows
-    as the cube of the unknowns: minutes for 10 arcs) is skipped; otherwise the usual path
-    runs from the start.
+    no negative eigenvalue, that point is a strict local minimum of the discrete problem near
+    the start (on the stored 8-crossing states, the one SLSQP reached too) and the dense
+    SLSQP (whose cost grows as the cube of the unknowns: minutes for 10 arcs) is skipped;
+    otherwise the usual path runs from the start.
 
     ``budget_s`` bounds the CPU seconds (of this process) of the SLSQP searches, all escapes
     together: past it the search stops after its current iteration, Newton polishes what it
@@ -750,7 +750,7 @@ def _coarse_minimum(prob: DiscreteProblem, x: np.ndarray, max_escapes: int = 4,
     if newton_first:
         xn, lam, newton = _newton(prob, x, maxiter=15)   # quadratic: a near start needs < 10
         if newton["residual"] <= 1e-10:
-            w, V, Z = _reduced_spectrum(prob, xn, lam)
+            w = _reduced_spectrum(prob, xn, lam)[0]
             if w[0] >= -1e-8 * np.max(np.abs(w)):
                 return xn, lam, {
                     "success": True, "message": "Newton from the start", "K": prob.K,
