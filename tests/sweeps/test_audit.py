@@ -12,6 +12,7 @@ import sys
 import numpy as np
 import pytest
 
+from stiffknots.errors import UserInputError
 from stiffknots.store import Store
 from stiffknots.sweeps import budget_of, parse_models, sweep_settings
 from stiffknots.sweeps.audit import (
@@ -19,6 +20,7 @@ from stiffknots.sweeps.audit import (
     audit_budget,
     audit_seed,
     judge,
+    run_audit,
     sample_entries,
     summarise,
     wilson_interval,
@@ -118,6 +120,35 @@ def test_the_draw_is_seeded_and_takes_converged_verdicts_only(tmp_path):
         assert sample_entries(st, sample=10, seed=1, models=("bead",))[0] == []
         assert {r["knot"] for r in sample_entries(st, sample=10, max_crossings=4)[0]} \
             == {"3_1", "4_1"}
+
+
+def test_the_draw_may_be_limited_to_named_knots(tmp_path):
+    with Store(tmp_path / "a.db") as st:
+        for k, eps in [("3_1", 90.0), ("4_1", 130.0), ("5_1", 150.0)]:
+            _plant(st, k, eps)
+        _plant(st, "6_1", 170.0, converged=False)
+        named, n = sample_entries(st, sample=10, knots=["4.1", "5_1", "6_1"])
+        assert n == 2 and [r["knot"] for r in named] == ["4_1", "5_1"]  # 6_1: not converged
+        with pytest.raises(UserInputError, match="7_99"):
+            sample_entries(st, knots=["7_99"])
+        plain = run_audit(st, sample=10, run=False)
+        only = run_audit(st, sample=10, knots=["5_1", "3_1"], run=False)
+        assert "knots" not in plain.params and only.params["knots"] == ["3_1", "5_1"]
+        assert only.audit != plain.audit and [r["knot"] for r in only.rows] == ["3_1", "5_1"]
+
+
+def test_audit_knots_on_the_command_line(tmp_path):
+    db = tmp_path / "a.db"
+    with Store(db) as st:
+        _plant(st, "3_1", 90.0)
+        _plant(st, "6_1", 170.0, converged=False)
+    cmd = [sys.executable, "-m", "stiffknots.cli", "audit", "--db", str(db)]
+    p = subprocess.run([*cmd, "--knots", "6_1"], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "nothing to audit: no converged tube verdict of 6_1" in p.stdout
+    bad = subprocess.run([*cmd, "--knots", "3_1,7_99"], capture_output=True, text=True,
+                         timeout=120)
+    assert bad.returncode == 2 and "7_99" in bad.stderr
 
 
 @pytest.mark.slow  # a Dask cluster and four short searches (≈ 30 s)

@@ -55,6 +55,9 @@ def audit(
     ] = "tube",
     max_crossings: Annotated[int | None, typer.Option(
         help="Only knots with at most this many crossings.")] = None,
+    knots: Annotated[str | None, typer.Option(
+        help="Only these knots, separated by commas (12n_113,12a_801); a knot without a "
+             "converged verdict is listed as not audited.")] = None,
     scheduler: Annotated[str | None, typer.Option(
         help="Address of a running Dask scheduler; default: a local cluster.")] = None,
     workers: Annotated[int | None, typer.Option(
@@ -84,6 +87,14 @@ def audit(
     V.seed(seed)
     if max_crossings is not None:
         V.integer("max_crossings", max_crossings, 3, 13)
+    knot_list = None
+    if knots is not None:
+        from stiffknots.sweeps import resolve_knots
+
+        knot_list = [s.strip() for s in knots.split(",") if s.strip()]
+        if not knot_list:
+            raise UserError("--knots must be knot names separated by commas, e.g. 3_1,4_1")
+        knot_list = resolve_knots(knot_list)  # an unknown name fails before the database
     scheduler = cluster_options(scheduler, workers)
     if not db.strip():
         raise UserError("--db must name a results database file, got ''")
@@ -97,7 +108,8 @@ def audit(
         raise UserError(f"--db {db}: {e}") from None
     with store, SweepProgress() as bar:
         res = run_audit(store, models=names, sample=sample, seed=seed, depth=depth,
-                        replicas=replicas, max_crossings=max_crossings, scheduler=scheduler,
+                        replicas=replicas, max_crossings=max_crossings, knots=knot_list,
+                        scheduler=scheduler,
                         workers=workers, listener=bar)
     d = res.to_dict()
     if res.interrupted:
@@ -119,8 +131,9 @@ def audit(
 def _print(d: dict) -> None:
     p = d["params"]
     if not d["entries"]:
-        out.print(f"nothing to audit: no converged {' or '.join(p['models'])} verdict in the "
-                  "database (stiffknots db grounds lists its verdicts)", highlight=False)
+        among = f" of {', '.join(p['knots'])}" if p.get("knots") else " in the database"
+        out.print(f"nothing to audit: no converged {' or '.join(p['models'])} verdict{among} "
+                  "(stiffknots db grounds lists its verdicts)", highlight=False)
         return
     t = Table(title=f"audit {d['audit']}: {len(d['entries'])} of {d['converged']} converged "
                     f"entries, {p['replicas']} searches × {p['depth']:g} replica budgets each",
@@ -144,6 +157,10 @@ def _print(d: dict) -> None:
         out.print(f"{m}: {rate_text(r)}", highlight=False)
     for k, r in s["by_crossings"].items():
         out.print(f"  {k.replace('/', ', n_c = ')}: {rate_text(r)}", highlight=False)
+    missing = [k for k in p.get("knots") or () if k not in {r["knot"] for r in d["entries"]}]
+    if missing:
+        out.print(f"not audited (no converged verdict of {' or '.join(p['models'])}): "
+                  + ", ".join(missing), highlight=False)
     if s["unsearched"]:
         out.print(f"{s['unsearched']} entries with no audit search ended (not counted)",
                   highlight=False)

@@ -75,8 +75,8 @@ def audit_seed(seed: int) -> int:
 
 
 def sample_entries(store: Store, *, models: Sequence[str] = ("tube",), sample: int =
-                   DEFAULT_SAMPLE, seed: int = 0, max_crossings: int | None = None
-                   ) -> tuple[list[dict], int]:
+                   DEFAULT_SAMPLE, seed: int = 0, max_crossings: int | None = None,
+                   knots: Sequence[str] | None = None) -> tuple[list[dict], int]:
     """The converged ground states to audit, drawn at random with ``seed``.
 
     Parameters
@@ -91,6 +91,9 @@ def sample_entries(store: Store, *, models: Sequence[str] = ("tube",), sample: i
         knot-table order).
     max_crossings : int, optional
         Only knots with at most this many crossings.
+    knots : sequence of str, optional
+        Only these knots (any usual spelling; an unknown name is an error). A knot with no
+        converged entry is not drawn.
 
     Returns
     -------
@@ -100,9 +103,12 @@ def sample_entries(store: Store, *, models: Sequence[str] = ("tube",), sample: i
     """
     from stiffknots.knots.catalogue import get_knot
 
+    from stiffknots.sweeps.plan import resolve_knots
+
     sample = V.integer("sample", sample, 1, 100_000)
+    only = None if knots is None else set(resolve_knots(knots))
     rows = [r for r in store.ground_states(problem=PROBLEM, structure=False)
-            if r["exclusion"] in models
+            if r["exclusion"] in models and (only is None or r["knot"] in only)
             and (max_crossings is None or get_knot(r["knot"]).crossing_number <= max_crossings)
             and ensemble_converged(r)]
     drawn = sorted(random.Random(V.seed(seed)).sample(range(len(rows)), min(sample, len(rows))))
@@ -152,7 +158,8 @@ class AuditResult:
     audit : str
         The audit's id (16 hex digits of its parameters' hash).
     params : dict
-        sample, seed, depth, replicas, models, max_crossings, tolerance.
+        sample, seed, depth, replicas, models, max_crossings, tolerance (and knots, the
+        catalogue names, when the audit was limited to them).
     converged : int
         Converged entries there were to draw from.
     rows : list of dict
@@ -237,9 +244,9 @@ def _settings_of(store: Store, entry: Mapping[str, Any]) -> dict:
 
 def run_audit(store: Store, *, models: Sequence[str] = ("tube",), sample: int = DEFAULT_SAMPLE,
               seed: int = 0, depth: float = DEFAULT_DEPTH, replicas: int = DEFAULT_REPLICAS,
-              max_crossings: int | None = None, scheduler: str | None = None,
-              workers: int | None = None, listener: Any = None, run: bool = True
-              ) -> AuditResult:
+              max_crossings: int | None = None, knots: Sequence[str] | None = None,
+              scheduler: str | None = None, workers: int | None = None, listener: Any = None,
+              run: bool = True) -> AuditResult:
     """Audit the verdicts of ``store`` (module docstring): draw, search again, judge, count,
     store.
 
@@ -247,7 +254,7 @@ def run_audit(store: Store, *, models: Sequence[str] = ("tube",), sample: int = 
     ----------
     store : Store
         The results database (written: the audit's searches and its rows).
-    models, sample, seed, max_crossings
+    models, sample, seed, max_crossings, knots
         What to draw (:func:`sample_entries`).
     depth : float
         Moves of each audit search in moves of one of the entry's replicas (≥ 0.1).
@@ -273,10 +280,14 @@ def run_audit(store: Store, *, models: Sequence[str] = ("tube",), sample: int = 
     params = {"sample": int(sample), "seed": V.seed(seed), "depth": float(depth),
               "replicas": replicas, "models": sorted(models), "max_crossings": max_crossings,
               "tolerance": TOLERANCE}
+    if knots is not None:  # only when given: the audits without it keep their ids
+        from stiffknots.sweeps.plan import resolve_knots
+
+        params["knots"] = resolve_knots(knots)
     audit_budget({"moves": 1000}, depth, replicas)  # a bad depth fails before anything runs
     res = AuditResult(settings_hash(params), params)
     entries, res.converged = sample_entries(store, models=models, sample=sample, seed=seed,
-                                            max_crossings=max_crossings)
+                                            max_crossings=max_crossings, knots=knots)
     search_seed = audit_seed(seed)
     now = datetime.now(UTC).isoformat(timespec="seconds")
     for (exclusion, beads, thickness, _h), group in _groups(store, entries).items():
