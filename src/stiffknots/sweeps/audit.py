@@ -102,7 +102,6 @@ def sample_entries(store: Store, *, models: Sequence[str] = ("tube",), sample: i
         converged entries there were to draw from.
     """
     from stiffknots.knots.catalogue import get_knot
-
     from stiffknots.sweeps.plan import resolve_knots
 
     sample = V.integer("sample", sample, 1, 100_000)
