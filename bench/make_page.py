@@ -530,6 +530,12 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "Dask, both routes, the thin-limit grounds and the cost",
      "stiffknots atlas --max-crossings 8 --models tube --thin --json > RUN.json; python "
      "bench/thin_stage.py DB --run RUN.json", thin_stage),
+    ("thin_stage_default", "The thin stage at the default ladder (to w/L = 0.00025)",
+     "the same, `--thin-budget default`: nine widths down to w/L = 0.00025 and the "
+     "discretisation measured per branch, against the small ladder's four to 0.0005",
+     "stiffknots atlas --max-crossings 8 --models tube --thin --thin-budget default --json > "
+     "RUN.json; python bench/thin_stage.py DB --run RUN.json --name thin_stage_default",
+     thin_stage),
     ("sample_12", "A sample of the knots of 11 and 12 crossings",
      "converged %, CPU s a knot and the n = i knots of a seeded sample at the default budget "
      "(tube), and the projection for all 2,977 knots",

@@ -2,7 +2,7 @@
 routes, the thin-limit grounds, and what the stage cost.
 
     stiffknots atlas --max-crossings 8 --models tube --thin --db DB --json > RUN.json
-    python bench/thin_stage.py DB [--run RUN.json] [--note TEXT]
+    python bench/thin_stage.py DB [--run RUN.json] [--note TEXT] [--name thin_stage]
 
 Reads the ``thin`` table (:func:`stiffknots.store.thin.thin_knots`: each knot's newest run)
 and, with ``--run``, the atlas command's ``--json`` (the sweep's and the thin stage's wall and
@@ -10,7 +10,9 @@ CPU seconds). Per knot: its states, the thin-limit ground (ε* ± error, the str
 whether they agree), the ground at the census's width and whether it differs. In all: the
 states compared and agreeing (within twice the branch's error or 0.5 %,
 ``stiffknots.studies.thin_states.AGREE_REL``), the n = i knots against 2π²i², the thin-limit
-grounds by class (circular braid, 4-fold cage, 80, other). Writes bench/thin_stage.json.
+grounds by class (circular braid, 4-fold cage, 80, other). Writes bench/thin_stage.json (the
+atlas's default, ``--thin-budget small``), or bench/NAME.json with ``--name`` (the default
+ladder: ``--name thin_stage_default``).
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("db")
     ap.add_argument("--run", default=None, help="The atlas command's --json output.")
     ap.add_argument("--note", default=None)
+    ap.add_argument("--name", default="thin_stage", help="bench/NAME.json is written.")
     a = ap.parse_args(argv)
     with Store(a.db, readonly=True) as s:
         knots = thin_knots(s)
@@ -92,7 +95,7 @@ def main(argv: list[str] | None = None) -> None:
           f"{doc['compared']} compared agree; thin ground differs from the finite-width "
           f"ground for {len(doc['differs'])}: {', '.join(doc['differs']) or 'none'}; "
           f"classes {doc['classes']}; thin stage {doc['thin_cpu_seconds']:.0f} CPU s")
-    stable_path("thin_stage").write_text(json.dumps(doc, indent=1) + "\n")
+    stable_path(a.name).write_text(json.dumps(doc, indent=1) + "\n")
 
 
 if __name__ == "__main__":
