@@ -348,8 +348,10 @@ def thin_stage(d: dict) -> list[str]:
             f"{run['thin_wall_seconds']:,.0f} s wall ({run['thin_cpu_seconds']:,.0f} CPU s) on "
             f"{run['workers']} workers." if run.get("thin_wall_seconds") else "")
     ni = "; ".join(f"{e['knot']} {100 * e['rel']:+.3f} %" for e in d["n_eq_i"])
+    narrow = (f" ({d['agree_narrow']} of the {d['compared_narrow']} whose extrapolation's "
+              "error is at most 2 % of its ε*)" if "agree_narrow" in d else "")
     out += ["", f"{d['n_knots']} knots, {d['states']} states; {d['agree']} of {d['compared']} "
-                f"states with both routes agree; {d['no_limit']} branches left their state "
+                f"states with both routes agree{narrow}; {d['no_limit']} branches left their state "
                 f"(no limit of their own). Thin-limit grounds by class: "
                 + ", ".join(f"{k} {v}" for k, v in sorted(d["classes"].items()))
                 + f"; the thin-limit ground is not the finite-width ground for "

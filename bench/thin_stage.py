@@ -35,6 +35,7 @@ def main(argv: list[str] | None = None) -> None:
     from stiffknots.knots.catalogue import get_knot
     from stiffknots.store import Store
     from stiffknots.store.thin import thin_knots
+    from stiffknots.studies.thin_states import MAX_COMPARED_ERROR
 
     ap = argparse.ArgumentParser()
     ap.add_argument("db")
@@ -63,6 +64,10 @@ def main(argv: list[str] | None = None) -> None:
                        for st in t["states"]]})
     states = [st for r in rows for st in r["states"]]
     compared = [st for st in states if st["agree"] is not None]
+    # the stage's rule since the tenth session: a branch whose error is over
+    # MAX_COMPARED_ERROR of its ε* is not compared (rows stored before kept their agree)
+    narrow = [st for st in compared
+              if (st["error"] or 0.0) <= MAX_COMPARED_ERROR * abs(st["epsilon_thin"])]
     n_eq_i = []
     for r in rows:
         if r["n"] == r["i"] and r["epsilon_thin"] is not None:
@@ -73,6 +78,7 @@ def main(argv: list[str] | None = None) -> None:
     doc = {"meta": run_meta(argv, note=a.note), "knots": rows, "n_knots": len(rows),
            "states": len(states), "compared": len(compared),
            "agree": sum(bool(st["agree"]) for st in compared),
+           "compared_narrow": len(narrow), "agree_narrow": sum(bool(st["agree"]) for st in narrow),
            "no_limit": sum(st["epsilon_thin"] is None for st in states),
            "differs": [r["knot"] for r in rows if r["differs"]],
            "classes": dict(Counter(_class(r["ground"]) for r in rows)),
@@ -92,7 +98,9 @@ def main(argv: list[str] | None = None) -> None:
               f"(structure {r['structure_epsilon']}, agree {r['agree']}); finite "
               f"{r['finite']}")
     print(f"{doc['n_knots']} knots, {doc['states']} states, {doc['agree']} of "
-          f"{doc['compared']} compared agree; thin ground differs from the finite-width "
+          f"{doc['compared']} compared agree ({doc['agree_narrow']} of "
+          f"{doc['compared_narrow']} with an error ≤ {100 * MAX_COMPARED_ERROR:.0f} % of ε*); "
+          f"thin ground differs from the finite-width "
           f"ground for {len(doc['differs'])}: {', '.join(doc['differs']) or 'none'}; "
           f"classes {doc['classes']}; thin stage {doc['thin_cpu_seconds']:.0f} CPU s")
     stable_path(a.name).write_text(json.dumps(doc, indent=1) + "\n")

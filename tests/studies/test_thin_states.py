@@ -79,3 +79,26 @@ def test_route_difference_says_why_two_routes_differ():
     assert "asymptotic" in route_difference(178.5, 177.6529, "CB(3)", False)
     assert "not this branch's limit" in route_difference(125.0, 126.4725, "2 point-braids",
                                                          False)
+
+
+def test_routes_agree_within_twice_the_error_unless_the_error_decides_nothing():
+    from stiffknots.studies.thin_states import MAX_COMPARED_ERROR, routes_agree, too_wide
+
+    cage = {"epsilon": 126.4725, "keeps_knot": True, "minimum": True}
+    assert routes_agree(126.41, 0.18, cage) is True          # 4_1's cage, small ladder
+    assert routes_agree(128.42, 0.13, cage) is False         # 6_1's `other`
+    assert routes_agree(126.9, 0.01, cage) is True           # within 0.5 % of ε
+    # 8_3 at the default ladder: 114.5 ± 15.2 lies "within twice its error" of the cage, an
+    # agreement that decides nothing — not compared, and the reason says so
+    assert routes_agree(114.53, 15.23, cage) is None
+    why = too_wide(114.53, 15.23)
+    assert "not compared" in why and "13 %" in why
+    assert too_wide(126.41, 0.18) is None
+    edge = MAX_COMPARED_ERROR * 126.0
+    assert routes_agree(126.0, edge, cage) is True and routes_agree(126.0, 1.01 * edge,
+                                                                    cage) is None
+    # no structure value, a saddle, strands that meet: not compared
+    assert routes_agree(126.41, 0.18, {"epsilon": None}) is None
+    assert routes_agree(126.41, 0.18, {**cage, "minimum": False}) is None
+    assert routes_agree(126.41, 0.18, {**cage, "keeps_knot": False}) is None
+    assert routes_agree(None, None, cage) is None

@@ -36,8 +36,8 @@ from stiffknots.problems import validate as V
 from stiffknots.problems.base import solve
 from stiffknots.studies.branches import LADDER, follow_states
 
-__all__ = ["BUDGETS", "AGREE_REL", "route_difference", "structure_route",
-           "thin_limit_states"]
+__all__ = ["BUDGETS", "AGREE_REL", "MAX_COMPARED_ERROR", "route_difference", "routes_agree",
+           "structure_route", "thin_limit_states"]
 
 #: What one run spends: the ladder of w/L and how each width is reached.
 BUDGETS: dict[str, dict[str, Any]] = {
@@ -49,6 +49,35 @@ BUDGETS: dict[str, dict[str, Any]] = {
 
 #: Two routes agree within twice the branch's error or this fraction of ε.
 AGREE_REL = 5e-3
+#: A branch whose extrapolation's error exceeds this fraction of its ε* is not compared: an
+#: agreement within twice such an error decides nothing (8_3's branch, still falling by 3 a
+#: width at w/L = 0.00025, extrapolated to 114.5 ± 15.2 and "agreed" with the cage's 126.47).
+MAX_COMPARED_ERROR = 0.02
+
+
+def routes_agree(epsilon_thin: float | None, error: float | None, route: dict) -> bool | None:
+    """Whether a state's two routes agree: the branch's ε* and the structure route's ε within
+    twice the branch's error or :data:`AGREE_REL` of ε. None (not compared) when either
+    number is missing, the structure route's solution is not a converged minimum or lets
+    strands meet, or the branch's error exceeds :data:`MAX_COMPARED_ERROR` of its ε*."""
+    se = route.get("epsilon")
+    if se is None or epsilon_thin is None or not route.get("keeps_knot") \
+            or not route.get("minimum", True):
+        return None
+    err = error or 0.0
+    if err > MAX_COMPARED_ERROR * abs(epsilon_thin):
+        return None
+    return abs(epsilon_thin - se) <= max(2 * err, AGREE_REL * se)
+
+
+def too_wide(epsilon_thin: float | None, error: float | None) -> str | None:
+    """The reason a branch is not compared for its error (None when it is narrow enough)."""
+    if epsilon_thin is None or error is None or error <= MAX_COMPARED_ERROR * abs(epsilon_thin):
+        return None
+    return (f"not compared: the branch's extrapolation {epsilon_thin:.2f} ± {error:.2g} is "
+            f"{100 * error / abs(epsilon_thin):.0f} % uncertain (over "
+            f"{100 * MAX_COMPARED_ERROR:.0f} %): the branch is far from its limit on this "
+            "ladder, and an agreement within such an error decides nothing")
 
 
 def _crossing(lower: dict, finite: dict) -> float | None:
@@ -265,11 +294,7 @@ def follow_census(knot: Any, starts: list[dict], *, budget: str = "default", see
     for i, (s, br) in enumerate(zip(starts, fs["branches"], strict=True)):
         route = structure_route(br, say=say, tag=f"state {i} ({s['name']})")
         eps_t, err = br["epsilon_thin"], br["error"]
-        agree = None
-        if route["epsilon"] is not None and eps_t is not None and route["keeps_knot"] \
-                and route.get("minimum", True):
-            agree = abs(eps_t - route["epsilon"]) <= max(2 * (err or 0.0),
-                                                         AGREE_REL * route["epsilon"])
+        agree = routes_agree(eps_t, err, route)
         rows.append({
             "shape": s["name"], "label": s["label"], "multiplicity": s["multiplicity"],
             "structure": s["structure"], "epsilon": s["epsilon"], "searches": s["searches"],
@@ -278,7 +303,9 @@ def follow_census(knot: Any, starts: list[dict], *, budget: str = "default", see
             "structure_epsilon": route["epsilon"], "structure_error": route["error"],
             "structure_name": route["name"], "structure_route": route,
             "agree": agree,
-            "difference": route_difference(eps_t, route["epsilon"], route["name"], agree),
+            "difference": (route_difference(eps_t, route["epsilon"], route["name"], agree)
+                           or (too_wide(eps_t, err) if route["epsilon"] is not None
+                               else None)),
             "points": br["points"], "chains": br["chains"],
             "fit": br["fit"], "discretisation": br["discretisation"],
             "parameters": br["parameters"]})
