@@ -106,3 +106,30 @@ def test_thin_limit_figure_eight_names_its_thin_limit_ground_state():
     assert d["margin"]["gap"] > 0 and d["margin"]["next"] != d["ground"]
     if d["ground"] != 0:
         assert d["crossing"] is not None
+
+
+def test_the_table_says_why_routes_differ_or_are_not_compared(capsys):
+    """The rows' reasons: a disagreement is 'routes differ — …', a branch too uncertain to
+    compare says 'not compared' (no 'differ')."""
+    from stiffknots.cli.thin_limit import _table
+    from stiffknots.studies.thin_states import route_difference, too_wide
+
+    def state(shape, eps, eps_t, err, se, agree, why):
+        return {"shape": shape, "epsilon": eps, "epsilon_thin": eps_t, "error": err,
+                "structure_epsilon": se, "agree": agree, "event": None, "events": [],
+                "points": [{"beads": 157}], "structure": "2 point-braids",
+                "structure_route": {"method": "the graph of the chain", "note": None},
+                "difference": why}
+
+    res = {"knot": "8_3", "census": {"width": {"text": "tube w = 1/√2"}, "replicas": 6,
+                                     "converged": True, "convergence": "3 searches"},
+           "budget": "default", "seed": 0, "parameters": {"widths": [0.004, 0.00025]},
+           "ground": 0, "margin": None, "crossing": None,
+           "states": [state("other", 197.4, 114.53, 15.23, 126.4725, None,
+                            too_wide(114.53, 15.23)),
+                      state("4C", 199.0, 128.42, 0.13, 126.4725, False,
+                            route_difference(128.42, 126.4725, "2 point-braids", False))]}
+    _table(res)
+    out = capsys.readouterr().out
+    assert "state 0: not compared: the branch's extrapolation 114.53 ± 15" in out
+    assert "state 1: routes differ — the branch's extrapolation lies 1.54 % above" in out

@@ -181,8 +181,9 @@ def _table(res) -> None:
                     else "") + ")")
     out.print(line, markup=False, highlight=False)
     for i, st_i in enumerate(res["states"]):
-        if st_i.get("difference"):
-            out.print(f"  state {i}: routes differ — {st_i['difference']}", markup=False,
+        if st_i.get("difference"):  # why the routes differ, or why they are not compared
+            head = "routes differ — " if st_i.get("agree") is False else ""
+            out.print(f"  state {i}: {head}{st_i['difference']}", markup=False,
                       highlight=False)
     if g != 0:
         where = (f"; the branches cross above w/L = {res['crossing']:g}"
