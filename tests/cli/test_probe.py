@@ -364,6 +364,8 @@ CASES = [
     ("audit --scheduler nonsense", r"--scheduler must be a scheduler address", False),
     ("audit --workers 0", r"--workers must be an integer in \[1, 1,024\], got 0", False),
     ("audit --workers 2 --scheduler tcp://h:1", r"--workers is for the local cluster", False),
+    ("audit --knots ,", r"--knots must be knot names separated by commas", True),
+    ("audit --knots 3_1,7_99", r"unknown knot '7_99'", False),
     # --- atlas --------------------------------------------------------------------------------
     ("atlas", r"give --max-crossings K .* or --knots", False),
     ("atlas --max-crossings 0", r"--max-crossings must be an integer in \[3, 13\], got 0", True),
