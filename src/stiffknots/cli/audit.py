@@ -19,7 +19,7 @@ from stiffknots.cli.app import (
     out,
     prepare_file,
 )
-from stiffknots.cli.atlas import SweepProgress, cluster_options
+from stiffknots.cli.atlas import SweepProgress, _knot_list, cluster_options
 
 
 def _pct(x: float | None) -> str:
@@ -91,10 +91,7 @@ def audit(
     if knots is not None:
         from stiffknots.sweeps import resolve_knots
 
-        knot_list = [s.strip() for s in knots.split(",") if s.strip()]
-        if not knot_list:
-            raise UserError("--knots must be knot names separated by commas, e.g. 3_1,4_1")
-        knot_list = resolve_knots(knot_list)  # an unknown name fails before the database
+        knot_list = resolve_knots(_knot_list(knots))  # an unknown name fails before the db
     scheduler = cluster_options(scheduler, workers)
     if not db.strip():
         raise UserError("--db must name a results database file, got ''")
