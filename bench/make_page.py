@@ -295,6 +295,41 @@ def verdict_audit(d: dict) -> list[str]:
     return out
 
 
+def audit_campaign(d: dict) -> list[str]:
+    out = [f"A fixed random order of the 249 knots through 10 crossings (seed "
+           f"{d['order_seed']}), swept chunk by chunk with the tube model (N = 150, w/L = 0.0047, "
+           "seed 0) and each chunk's converged verdicts audited at the audit's defaults (3 "
+           "searches of 2 replica budgets each, a false verdict: one > 0.1 % lower). One block "
+           "per search compared.", ""]
+    for label, run in d["searches"].items():
+        s = run["summary"]
+        chunks = [c for c in d["chunks"] if c["search"] == label]
+        opts = " ".join(run["atlas_args"]) or "the atlas's defaults"
+        out += [f"**{label}** ({opts}): {s['knots']} knots in {len(chunks)} chunk"
+                f"{'s' if len(chunks) != 1 else ''}, {s['converged']} converged, "
+                f"{s['atlas_cpu_seconds_per_knot']:.0f} CPU s of sweep a knot.", "",
+                "| crossings | knots | converged | audited | false | sweep CPU s a knot |",
+                "| --- | --- | --- | --- | --- | --- |"]
+        for c, v in s["by_crossings"].items():
+            out.append(f"| {c} | {v['knots']} | {v['converged']} | {v['audited']} | "
+                       f"{v['false']} | {v['atlas_cpu_seconds'] / v['knots']:.0f} |")
+        r = {"n": s["audited"], "false": s["false"], "rate": s["rate"], "low": s["low"],
+             "high": s["high"]}
+        line = f"False verdicts: {_rate(r)}"
+        if s["false"]:
+            line += ": " + "; ".join(
+                f"{k['knot']} {k['epsilon']:.2f} ({k['state']}) → {k['audit_epsilon']:.2f} "
+                f"({k['audit_state']})" for k in run["knots"].values() if k.get("false_verdict"))
+        out += ["", line + "."]
+        fam = s.get("by_start_families")
+        if fam:
+            out.append("Verdicts whose agreeing searches came from one start family: "
+                       f"{fam['one']['false']} false of {fam['one']['audited']}; from several: "
+                       f"{fam['several']['false']} of {fam['several']['audited']}.")
+        out.append("")
+    return out
+
+
 def verdict_rules(d: dict) -> list[str]:
     out = ["| run | rule | converged | false (> 0.1 % above the lowest state found) | replicas "
            "| CPU s |", "| --- | --- | --- | --- | --- | --- |"]
@@ -520,6 +555,10 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
     ("verdict_audit", "The audit of the verdicts", "how often a converged ground state is "
      "beaten by independent searches (`stiffknots audit`), with its 95 % interval",
      "python bench/verdict_audit.py DB", verdict_audit),
+    ("audit_campaign", "The audit of the tube atlas through 10 crossings, chunk by chunk",
+     "the false-verdict rate of the tube's verdicts on a growing random sample of the 249 "
+     "knots, with each knot's sweep cost",
+     "python bench/audit_campaign.py --count 30", audit_campaign),
     ("verdict_rules", "Verdict rules and search budgets side by side",
      "tube atlases of the same knots under other rules and budgets, each verdict against the "
      "lowest state any of them found", "python bench/verdict_rules.py LABEL=DB:K ... --also "

@@ -11,7 +11,10 @@ while it is judged); its CPU seconds are those of its stored replicas.
     python bench/verdict_rules.py LABEL=DB:K [LABEL=DB:K ...] [--also DIR_OR_JSON ...]
 
 ``--also`` adds lowest states from ``stiffknots anneal --json`` outputs (a folder of them) or a
-``bench/verdict_audit.json`` (its entries' ``audit_epsilon``). Writes bench/verdict_rules.json.
+``bench/verdict_audit.json`` (its entries' ``audit_epsilon``). A database's own audit searches
+(problem ``audit``) count towards the lowest state too; its verdicts are read from its sweep
+ensemble (problem ``anneal``). ``--knots`` limits the comparison to those knots (the runs' other
+knots are left out); ``--name`` writes bench/NAME.json instead of bench/verdict_rules.json.
 """
 
 from __future__ import annotations
@@ -52,7 +55,10 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("runs", nargs="+", help="LABEL=DB:K (K: searches the tube verdict needs)")
     ap.add_argument("--also", nargs="*", default=[])
     ap.add_argument("--note", default=None, help="How the databases were made (in the meta).")
+    ap.add_argument("--knots", default=None, help="Only these knots, separated by commas.")
+    ap.add_argument("--name", default="verdict_rules")
     a = ap.parse_args(argv)
+    only = set(a.knots.split(",")) if a.knots else None
     runs = []
     for spec in a.runs:
         label, rest = spec.split("=", 1)
@@ -65,10 +71,17 @@ def main(argv: list[str] | None = None) -> None:
     for label, db, _ in runs:
         with Store(db, readonly=True) as st:
             for knot in st.knots():
-                s = st.states(knot, exclusion="tube", structure=False)
-                rows = st.replicas(knot=knot, exclusion="tube")
+                if only is not None and knot not in only:
+                    continue
+                ens = st.ensembles(knot=knot, exclusion="tube", problem="anneal")
+                if len(ens) != 1:
+                    raise SystemExit(f"{db}: {knot} has {len(ens)} tube sweep ensembles, not 1")
+                s = st.states(knot, exclusion="tube", settings_hash=ens[0]["settings_hash"],
+                              structure=False)
+                rows = st.replicas(knot=knot, exclusion="tube", problem="anneal")
                 states[(label, knot)] = (s, len(rows), sum(r["cpu_seconds"] or 0 for r in rows))
-                low[knot] = min(low.get(knot, float("inf")), s["ground"]["epsilon"])
+                every = [r["epsilon"] for r in st.replicas(knot=knot, exclusion="tube")]
+                low[knot] = min(low.get(knot, float("inf")), s["ground"]["epsilon"], *every)
     out, saved = [], base.AGREE["tube"]
     try:
         for label, db, k in runs:
@@ -95,7 +108,7 @@ def main(argv: list[str] | None = None) -> None:
               + f"), {r['replicas']} replicas, {r['cpu_seconds']:.0f} CPU s")
     doc = {"meta": run_meta(argv, note=a.note),
            "tolerance": TOL, "runs": out, "lowest": low}
-    stable_path("verdict_rules").write_text(json.dumps(doc, indent=1) + "\n")
+    stable_path(a.name).write_text(json.dumps(doc, indent=1) + "\n")
 
 
 if __name__ == "__main__":
