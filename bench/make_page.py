@@ -335,7 +335,10 @@ def verdict_rules(d: dict) -> list[str]:
            "| CPU s |", "| --- | --- | --- | --- | --- | --- |"]
     for r in d["runs"]:
         false = ", ".join(f"{e['knot']} +{100 * e['above']:.1f} %" for e in r["false"])
-        out.append(f"| {r['label']} | {r['rule']} searches | {r['converged']} of {r['knots']} "
+        rule = f"{r['rule']} searches" + (
+            f", stopping at the first of {', '.join(map(str, r['caps']))} replicas that agree"
+            if r.get("caps") else "")
+        out.append(f"| {r['label']} | {rule} | {r['converged']} of {r['knots']} "
                    f"| {len(r['false'])}{': ' + false if false else ''} | {r['replicas']} "
                    f"| {r['cpu_seconds']:,.0f} |")
     return out
@@ -563,6 +566,11 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "tube atlases of the same knots under other rules and budgets, each verdict against the "
      "lowest state any of them found", "python bench/verdict_rules.py LABEL=DB:K ... --also "
      "DIR", verdict_rules),
+    ("verdict_rules_10", "Longer searches through 10 crossings",
+     "the first chunk of the audit campaign (30 knots of 7–10 crossings) swept with 15 M and "
+     "30 M moves a replica, each verdict against the lowest state any sweep or audit found",
+     "python bench/verdict_rules.py 15M=A.db:3 30M=B.db:3 ... --knots CHUNK "
+     "--name verdict_rules_10", verdict_rules),
     ("thin_states", "Every state to w = 0", "`stiffknots thin-limit K` as typed: each state of "
      "the census followed to w/L → 0, both routes, the thin-limit ground state and the time",
      "python bench/thin_states.py 3_1:small 4_1 5_2 ...", thin_states),

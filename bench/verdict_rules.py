@@ -15,6 +15,12 @@ while it is judged); its CPU seconds are those of its stored replicas.
 (problem ``audit``) count towards the lowest state too; its verdicts are read from its sweep
 ensemble (problem ``anneal``). ``--knots`` limits the comparison to those knots (the runs' other
 knots are left out); ``--name`` writes bench/NAME.json instead of bench/verdict_rules.json.
+
+``LABEL=DB:K@2,4,6`` replays a sweep that stops early: a sweep's replica r depends only on the
+replicas before it, so a sweep under the rule of K that adds replicas 2 at a time from 2 would
+have run exactly the stored replicas numbered below the first of those caps at which the
+prefix converged (all of them where none did). Only for databases without continuation legs
+(a sweep with ``--moves``, which runs none).
 """
 
 from __future__ import annotations
@@ -46,6 +52,40 @@ def _lowest_from(path: Path, low: dict[str, float]) -> None:
                 low[k] = min(low.get(k, float("inf")), float(e))
 
 
+def _stopped_early(db: str, mine: dict, caps: list[int]) -> dict:
+    """``mine`` (knot → (states, replicas, CPU s)) as a sweep that stops at the first of
+    ``caps`` where the knot's verdict holds (the rule as set now) would have left it."""
+    import shutil
+    import sqlite3
+    import tempfile
+
+    from stiffknots.store.sqlite import Store
+    from stiffknots.sweeps.convergence import ensemble_converged
+
+    with sqlite3.connect(db) as con:
+        if con.execute("SELECT COUNT(*) FROM replicas WHERE problem = 'anneal' AND "
+                       "replica >= 1000000").fetchone()[0]:
+            raise SystemExit(f"{db}: continuation legs or seeded replicas: no early-stop replay")
+    out, left = {}, set(mine)
+    with tempfile.TemporaryDirectory() as tmp:
+        for cap in caps:
+            copy = f"{tmp}/cap{cap}.db"
+            shutil.copy(db, copy)
+            with sqlite3.connect(copy) as con:
+                con.execute("DELETE FROM replicas WHERE problem = 'anneal' AND replica >= ?",
+                            (cap,))
+            with Store(copy, readonly=True) as st:
+                for knot in sorted(left):
+                    h = mine[knot][0]["settings_hash"]
+                    s = st.states(knot, exclusion="tube", settings_hash=h, structure=False)
+                    if ensemble_converged(s):
+                        rows = st.replicas(knot=knot, exclusion="tube", problem="anneal")
+                        out[knot] = (s, len(rows), sum(r["cpu_seconds"] or 0 for r in rows))
+                        left.discard(knot)
+    out.update({k: mine[k] for k in left})
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
     import stiffknots.problems.base as base
     from stiffknots.store.sqlite import Store
@@ -63,12 +103,13 @@ def main(argv: list[str] | None = None) -> None:
     for spec in a.runs:
         label, rest = spec.split("=", 1)
         db, k = rest.rsplit(":", 1)
-        runs.append((label, db, int(k)))
+        k, _, caps = k.partition("@")
+        runs.append((label, db, int(k), [int(c) for c in caps.split(",")] if caps else None))
     low: dict[str, float] = {}
     for p in a.also:
         _lowest_from(Path(p), low)
     states = {}
-    for label, db, _ in runs:
+    for label, db, _, _ in runs:
         with Store(db, readonly=True) as st:
             for knot in st.knots():
                 if only is not None and knot not in only:
@@ -84,9 +125,11 @@ def main(argv: list[str] | None = None) -> None:
                 low[knot] = min(low.get(knot, float("inf")), s["ground"]["epsilon"], *every)
     out, saved = [], base.AGREE["tube"]
     try:
-        for label, db, k in runs:
+        for label, db, k, caps in runs:
             base.AGREE["tube"] = k
             mine = {kn: v for (lb, kn), v in states.items() if lb == label}
+            if caps:
+                mine = _stopped_early(db, mine, caps)
             conv, false = [], []
             for knot, (s, _, _) in mine.items():
                 if ensemble_converged(s):
@@ -95,7 +138,7 @@ def main(argv: list[str] | None = None) -> None:
                     if g > low[knot] * (1 + TOL):
                         false.append({"knot": knot, "epsilon": g, "lowest": low[knot],
                                       "above": g / low[knot] - 1})
-            out.append({"label": label, "db": db, "rule": k, "knots": len(mine),
+            out.append({"label": label, "db": db, "rule": k, "caps": caps, "knots": len(mine),
                         "converged": len(conv), "false": sorted(false, key=lambda e: -e["above"]),
                         "replicas": sum(v[1] for v in mine.values()),
                         "cpu_seconds": sum(v[2] for v in mine.values())})
