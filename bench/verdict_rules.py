@@ -55,22 +55,25 @@ def _lowest_from(path: Path, low: dict[str, float]) -> None:
 def _stopped_early(db: str, mine: dict, caps: list[int]) -> dict:
     """``mine`` (knot → (states, replicas, CPU s)) as a sweep that stops at the first of
     ``caps`` where the knot's verdict holds (the rule as set now) would have left it."""
-    import shutil
     import sqlite3
     import tempfile
 
     from stiffknots.store.sqlite import Store
     from stiffknots.sweeps.convergence import ensemble_converged
+    from stiffknots.sweeps.cross import OLDER_SEEDED_REPLICA
+    from stiffknots.sweeps.legs import LEG_REPLICA
 
+    own_below = min(OLDER_SEEDED_REPLICA, LEG_REPLICA)  # a model's own searches' numbers
     with sqlite3.connect(db) as con:
         if con.execute("SELECT COUNT(*) FROM replicas WHERE problem = 'anneal' AND "
-                       "replica >= 1000000").fetchone()[0]:
+                       "replica >= ?", (own_below,)).fetchone()[0]:
             raise SystemExit(f"{db}: continuation legs or seeded replicas: no early-stop replay")
     out, left = {}, set(mine)
     with tempfile.TemporaryDirectory() as tmp:
         for cap in caps:
             copy = f"{tmp}/cap{cap}.db"
-            shutil.copy(db, copy)
+            with sqlite3.connect(db) as src, sqlite3.connect(copy) as dst:
+                src.backup(dst)  # safe beside a running writer
             with sqlite3.connect(copy) as con:
                 con.execute("DELETE FROM replicas WHERE problem = 'anneal' AND replica >= ?",
                             (cap,))
@@ -122,7 +125,7 @@ def main(argv: list[str] | None = None) -> None:
                 rows = st.replicas(knot=knot, exclusion="tube", problem="anneal")
                 states[(label, knot)] = (s, len(rows), sum(r["cpu_seconds"] or 0 for r in rows))
                 every = [r["epsilon"] for r in st.replicas(knot=knot, exclusion="tube")]
-                low[knot] = min(low.get(knot, float("inf")), s["ground"]["epsilon"], *every)
+                low[knot] = min(low.get(knot, float("inf")), *every)  # the ground among them
     out, saved = [], base.AGREE["tube"]
     try:
         for label, db, k, caps in runs:
