@@ -108,3 +108,30 @@ def test_the_langevin_schedule_is_refused_for_the_tube_model():
 
     with pytest.raises(InvalidParameter, match="bead rule"):
         anneal("3_1", schedule=Schedule(kind="langevin"), params=MoveParams(exclusion="tube"))
+
+
+def test_a_start_the_exclusion_rule_does_not_admit_is_refused_before_any_worker():
+    """10_101's braid closure at N = 100 is admissible for the bead rule but brings two
+    strands 0.071 closer than the tube's w = 1/√2 where they cross: the tube problem's jobs
+    are refused with a message naming the start, N, the rule and the way out (before: a
+    ValueError of the engine's chain in the worker, naming neither), and the bead problem's
+    are built. At N = 150 the same start is admissible for the tube."""
+    import math
+
+    from stiffknots.engine.params import MoveParams
+    from stiffknots.engine.prims import check_state
+    from stiffknots.errors import EmbeddingError
+    from stiffknots.problems.closed import ClosedAnneal
+
+    w = 1 / math.sqrt(2)
+    tube = ClosedAnneal("10_101", beads=100, moves=1_000, replicas=1, start="braid",
+                        params=MoveParams(exclusion="tube", w=w))
+    assert check_state(tube.chains["braid"], 1, w, w, False) > 0.05  # the premise
+    with pytest.raises(EmbeddingError, match=r"braid embedding of 10_101 at N = 100 .*"
+                                             r"tube of diameter w = 0\.7071.*more beads"):
+        tube.jobs()
+    bead = ClosedAnneal("10_101", beads=100, moves=1_000, replicas=1, start="braid")
+    assert len(bead.jobs()) == 1
+    ok = ClosedAnneal("10_101", beads=150, moves=1_000, replicas=1, start="braid",
+                      params=MoveParams(exclusion="tube", w=w))
+    assert len(ok.jobs()) == 1

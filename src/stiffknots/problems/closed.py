@@ -168,6 +168,9 @@ class ClosedAnneal(Problem):
                                    "tube route (its dynamics holds beads apart, not tubes)")
         #: the settings of the tube-route searches (:data:`TUBE_ROUTE_FROM`), None without
         self.tube_settings = None
+        #: (start, exclusion, d, w) → the start chain's worst exclusion violation
+        #: (:meth:`_check_admissible`)
+        self._admissible: dict[tuple, float] = {}
         p = self.settings.params
         if tube_route and p.exclusion == "bead" and self.polish:
             from dataclasses import replace
@@ -195,6 +198,9 @@ class ClosedAnneal(Problem):
         route = (self.tube_settings is not None
                  and first >= TUBE_ROUTE_FROM * self.replicas)
         p = self.settings.params
+        for r in range(first, first + self.replicas):
+            self._check_admissible(self._start(r), (self.tube_settings if route
+                                                    else self.settings).params)
         return self._replica_jobs(
             self.tube_settings if route else self.settings,
             lambda r: self.chains[self._start(r)], self._start,
@@ -202,6 +208,38 @@ class ClosedAnneal(Problem):
             self.checkpoint_seconds, first, polish_params=p if route else None,
             search=(f"tube rule w = {p.d:.6g}, then polished under the bead rule" if route
                     else None))
+
+    def _check_admissible(self, start: str, params: MoveParams) -> None:
+        """Refuse, before any worker starts, a starting embedding that the exclusion rule of
+        ``params`` does not admit at this N (the engine would refuse the chain in the worker,
+        with a message that names neither the start nor the way out): a braid closure laid
+        out in few beads can bring two strands closer than the tube's w where they cross
+        (10_101's braid at N = 100: 0.071 too close for w = 1/√2). Checked once per start
+        and rule (O(N²) pairs).
+
+        Raises
+        ------
+        EmbeddingError
+            Naming the start, the knot, N, the rule and by how much, and what to change.
+        """
+        from stiffknots.engine.prims import check_state
+        from stiffknots.errors import EmbeddingError
+
+        seen = self._admissible
+        key = (start, params.exclusion, params.d, params.w)
+        if key not in seen:
+            x = self.chains[start]
+            seen[key] = float(check_state(x, 0 if params.exclusion == "bead" else 1,
+                                          params.d, params.w, False))
+        viol = seen[key]
+        if viol > 1e-12:  # the engine's own threshold (engine.state.ChainState)
+            rule = (f"bead rule (beads ≥ d = {params.d:.4g} apart)" if params.exclusion == "bead"
+                    else f"tube of diameter w = {params.w:.4g} (segments ≥ w apart)")
+            raise EmbeddingError(
+                f"the {start} embedding of {self.knot_name} at N = {self.beads} beads is not "
+                f"admissible for the {rule}: two strands come {viol:.3g} too close where they "
+                "cross; use more beads (--beads, or a larger --coarse), a thinner tube, or "
+                "another start")
 
     def continue_jobs(self, parents: list[Replica], first: int) -> list[Job] | None:
         """Continue each parent's search by :data:`LEG_HOPS` basin hops from its (polished)
