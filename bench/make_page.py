@@ -330,6 +330,30 @@ def audit_campaign(d: dict) -> list[str]:
     return out
 
 
+def search_schedules(d: dict) -> list[str]:
+    s = d["summary"]
+    ref = ", ".join(f"{k} {v:.2f}" for k, v in sorted(s["reference"].items()))
+    out = ["One search per row, `stiffknots anneal K --exclusion tube --replicas 1 --rounds 1 "
+           "--start braid --seed S` plus the variant's options, on the knots whose tube "
+           "verdicts the audit campaign beat. A search reaches the reference (the lowest ε "
+           "stored or found here) within 0.1 %: " + ref + ".", "",
+           "| variant | options | searches | within 0.1 % | median gap | CPU s a search "
+           "(process) | failed |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    opts = {r["variant"]: " ".join(r["options"]) for r in d["rows"]}
+    for v, x in s["variants"].items():
+        gap = "—" if x["median_gap"] is None else f"{100 * x['median_gap']:.2f} %"
+        cpu = "—" if x["cpu_s_per_search"] is None else f"{x['cpu_s_per_search']:.1f}"
+        out.append(f"| {v} | `{opts.get(v) or 'defaults'}` | {x['runs']} | {x['hits']} | "
+                   f"{gap} | {cpu} | {x.get('failed', 0)} |")
+    out += ["", "ε of every search, by knot:", "", "| variant | " + " | ".join(
+        sorted(s["reference"])) + " |", "| --- |" + " --- |" * len(s["reference"])]
+    for v, x in s["variants"].items():
+        out.append(f"| {v} | " + " | ".join(
+            ", ".join(f"{e:.2f}" for e in x["by_knot"].get(k, [])) or "—"
+            for k in sorted(s["reference"])) + " |")
+    return out
+
+
 def verdict_rules(d: dict) -> list[str]:
     out = ["| run | rule | converged | false (> 0.1 % above the lowest state found) | replicas "
            "| CPU s |", "| --- | --- | --- | --- | --- | --- |"]
@@ -571,6 +595,11 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "30 M moves a replica, each verdict against the lowest state any sweep or audit found",
      "python bench/verdict_rules.py 15M=A.db:3 30M=B.db:3 ... --knots CHUNK "
      "--name verdict_rules_10", verdict_rules),
+    ("search_schedules", "One search of the hardest tube knots under other schedules",
+     "how often a single search reaches the lowest known state of the knots whose verdicts "
+     "the audit beat, per schedule (coarse to fine, temperature windows, longer searches), "
+     "and its CPU seconds", "cd bench && python search_schedules.py --seeds 11,12 "
+     "--variants base,coarse100", search_schedules),
     ("thin_states", "Every state to w = 0", "`stiffknots thin-limit K` as typed: each state of "
      "the census followed to w/L → 0, both routes, the thin-limit ground state and the time",
      "python bench/thin_states.py 3_1:small 4_1 5_2 ...", thin_states),

@@ -381,3 +381,31 @@ def test_resolve_knots_by_crossing_number_and_sample():
                 {"crossings": [11], "sample": 0}):
         with pytest.raises(UserInputError):
             resolve_knots(**bad)
+
+
+def test_a_coarse_stage_is_the_tube_models_own_ensemble_and_runs_in_the_worker():
+    """budget.coarse = N0: the tube replicas' settings gain ``coarse`` (another ensemble);
+    the bead model's and every budget without it keep their settings and hashes (the stored
+    replicas of earlier sweeps keep their keys). The job a worker runs anneals its start at
+    N0 first (problems.coarse), stores what the stage did, and is verified as any replica."""
+    from stiffknots.sweeps.cluster import run_task
+
+    bead, tube = parse_models("bead,tube")
+    base = budget_of("tiny")
+    co = budget_of("tiny", coarse=75)
+    assert (co.name, co.coarse, co.as_dict()["coarse"]) == ("tiny", 75, 75)
+    assert "coarse" not in base.as_dict() and "coarse" not in sweep_settings(tube, base)
+    assert sweep_settings(tube, co)["coarse"] == 75
+    assert settings_hash(sweep_settings(tube, co)) != settings_hash(sweep_settings(tube, base))
+    assert settings_hash(sweep_settings(bead, co)) == settings_hash(sweep_settings(bead, base))
+    assert budget_of("default", replicas=3, coarse=100).coarse == 100  # a custom budget too
+    with pytest.raises(InvalidParameter, match="coarse must be an integer"):
+        budget_of("tiny", coarse=2)
+    # seed 0: its 100,000-move coarse chain resamples (seed 1's is refused by the
+    # resampling's certificate, and the replica then searches from its start, saying why)
+    (job,) = plan_sweep(["3_1"], [tube], replace(co, replicas=1), seed=0)
+    r = run_task(job, replace(co, replicas=1))
+    assert r.knot_verified
+    c = r.observables["coarse"]
+    assert c["used"] and c["beads"] == 75 and c["moves"] == 100_000
+    assert r.cpu_time >= c["cpu_seconds"] > 0  # the stage is part of the replica's cost

@@ -134,6 +134,9 @@ class Job:
     polish_params: Any = None
     #: how the search ran, when not plainly (kept in the replica's ``observables["search"]``)
     search: str | None = None
+    #: anneal the start at this many beads first and search from that chain, resampled
+    #: (:mod:`stiffknots.problems.coarse`); None: from the start itself
+    coarse: int | None = None
 
 
 DEFAULT_MOVES = AnnealSettings.moves  # 15 M at N = 150: relaxation + annealing (schedules.py)
@@ -257,6 +260,16 @@ def run_job(job: Job) -> Replica:
     kw = {"checkpoint": job.checkpoint, "resume": job.resume,
           "checkpoint_every": 10 if job.checkpoint else None,
           "checkpoint_seconds": job.checkpoint_seconds if job.checkpoint else None}
+    coarse = None
+    if job.coarse is not None:
+        from dataclasses import replace
+
+        from stiffknots.problems.coarse import coarse_start
+
+        y, coarse = coarse_start(job.knot, job.start, job.settings, len(job.coords),
+                                 job.coarse, job.seed, job.replica)
+        if y is not None:
+            job = replace(job, coords=y)
     if job.settings.schedule.kind == "tempering":
         raw = run_tempering(job.coords, job.settings, job.seed, job.replica, **kw)
     elif job.settings.schedule.kind == "langevin":
@@ -277,12 +290,17 @@ def run_job(job: Job) -> Replica:
     # (polish["seconds"]) and the knot check — the table's seconds and the store's wall/CPU
     # seconds left the last two out (a polish of 16 s at N = 600 after 2 s of annealing read
     # as a 2 s replica)
-    fields = dict(fields, wall_time=raw.wall_time + time.perf_counter() - wall0,
-                  cpu_time=(raw.cpu_time or 0.0) + time.process_time() - cpu0)
+    # a coarse stage (its own wall and CPU seconds) is part of the replica's cost too
+    pre_wall = coarse.get("wall_seconds", 0.0) if coarse else 0.0
+    pre_cpu = coarse.get("cpu_seconds", 0.0) if coarse else 0.0
+    fields = dict(fields, wall_time=pre_wall + raw.wall_time + time.perf_counter() - wall0,
+                  cpu_time=pre_cpu + (raw.cpu_time or 0.0) + time.process_time() - cpu0)
+    obs = {"search": job.search} if job.search else {}
+    if coarse is not None:
+        obs["coarse"] = coarse
     return Replica(**fields, knot=found, knot_verified=ok, start=job.start,
                    lineage=job.replica if job.lineage is None else job.lineage, leg=job.leg,
-                   knot_check=check, polish=info,
-                   observables={"search": job.search} if job.search else {})
+                   knot_check=check, polish=info, observables=obs)
 
 
 def polish_run(fields: dict, settings: AnnealSettings, params: Any = None
@@ -542,17 +560,18 @@ class Problem:
                       checkpoint_dir=None, resume: bool = False,
                       checkpoint_seconds: float | None = None, first: int = 0,
                       count: int | None = None, polish_params: Any = None,
-                      search: str | None = None) -> list[Job]:
+                      search: str | None = None, coarse: int | None = None) -> list[Job]:
         """One job per replica ``first`` … ``first + count − 1`` (``count``: default
         ``replicas``); replica r's seed is the r-th seed derived from the problem's seed,
-        whatever the round it runs in. ``polish_params``, ``search``: see :class:`Job`."""
+        whatever the round it runs in. ``polish_params``, ``search``, ``coarse``: see
+        :class:`Job`."""
         n = self.replicas if count is None else count
         seeds = dict(zip(range(first, first + n), replica_seeds(self.seed, first + n, first),
                          strict=True))
         return [Job(replica=r, seed=seeds[r], coords=coords(r), settings=settings,
                     knot=self.knot_name, start=start(r), start_code=code(r),
                     polish=self.polish, polish_params=polish_params, search=search,
-                    checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
+                    coarse=coarse, checkpoint=(Path(checkpoint_dir) / f"replica_{r}.ckpt.npz"
                                 if checkpoint_dir is not None else None),
                     resume=resume, checkpoint_seconds=checkpoint_seconds)
                 for r in range(first, first + n)]

@@ -130,7 +130,7 @@ class ClosedAnneal(Problem):
                  start: str | Sequence[str] = "all", rounds: int = DEFAULT_ROUNDS,
                  agree: int | None = None, rel_tol: float = 1e-3, initial=None,
                  polish: bool = True,
-                 tube_route: bool = False):
+                 tube_route: bool = False, coarse: int | None = None):
         from stiffknots.theory.bounds import closed_bounds
 
         if initial is not None:  # a curve of the user: named, resampled and checked first
@@ -171,6 +171,14 @@ class ClosedAnneal(Problem):
         #: (start, exclusion, d, w) → the start chain's worst exclusion violation
         #: (:meth:`_check_admissible`)
         self._admissible: dict[tuple, float] = {}
+        #: every new search first anneals its start at this many beads
+        #: (:mod:`stiffknots.problems.coarse`); None: from the start
+        self.coarse = None
+        if coarse is not None:
+            self.coarse = V.integer("coarse", coarse, 3, self.beads - 1)
+            if self.settings.schedule.kind in ("tempering", "langevin"):
+                raise InvalidParameter("coarse", coarse, "with an annealing schedule "
+                                       "(geometric or power)")
         p = self.settings.params
         if tube_route and p.exclusion == "bead" and self.polish:
             from dataclasses import replace
@@ -206,6 +214,7 @@ class ClosedAnneal(Problem):
             lambda r: self.chains[self._start(r)], self._start,
             lambda r: self.codes[self._start(r)], self.checkpoint_dir, self.resume,
             self.checkpoint_seconds, first, polish_params=p if route else None,
+            coarse=self.coarse,
             search=(f"tube rule w = {p.d:.6g}, then polished under the bead rule" if route
                     else None))
 
@@ -301,6 +310,8 @@ class ClosedAnneal(Problem):
         d = {**self.settings.as_dict(), "start": self.starts, "polish": self.polish}
         if self.tube_settings is not None:
             d["tube_route_from_round"] = TUBE_ROUTE_FROM + 1  # 1-based, as the report counts
+        if self.coarse is not None:
+            d["coarse_per_replica"] = self.coarse
         return d
 
 

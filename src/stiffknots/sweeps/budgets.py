@@ -107,6 +107,10 @@ class Budget:
         A Langevin bead ensemble still not converged at ``bead_max_replicas`` gets up to this
         many Langevin legs, one at a time, leg k continuing the (k+1)-th lowest of its own
         searches (:mod:`stiffknots.sweeps.legs`; ≈ 1.3 CPU s a leg at N = 150).
+    coarse : int or None
+        The tube model's replicas first anneal their start at this many beads and search from
+        that chain resampled (:mod:`stiffknots.problems.coarse`); None: from the start. Part
+        of the replicas' settings (another ensemble in the store).
     """
 
     name: str
@@ -118,6 +122,7 @@ class Budget:
     bead_steps: int = 1_000_000
     bead_max_replicas: int | None = None
     bead_legs: int = 0
+    coarse: int | None = None
 
     def validate(self) -> Budget:
         """Return self, or raise :class:`InvalidParameter` for a bad count (the limits of
@@ -128,7 +133,14 @@ class Budget:
             raise InvalidParameter("bead_search", self.bead_search,
                                    " or ".join(BEAD_SEARCHES))
         V.moves(self.bead_steps, "bead_steps")
+        if self.coarse is not None:
+            V.integer("coarse", self.coarse, 3, 10**6)
         return self
+
+    def coarse_of(self, model) -> int | None:
+        """The coarse stage's bead count of ``model``'s replicas: ``coarse`` for the tube
+        model, None for the bead rule (its Langevin search has no coarse stage)."""
+        return self.coarse if model.exclusion == "tube" else None
 
     def langevin(self, model) -> bool:
         """Whether ``model``'s replicas run the Langevin dynamics (bead rule, ``bead_search =
@@ -173,7 +185,8 @@ class Budget:
                 **({"bead_steps": self.bead_steps,
                     "bead_max_replicas": self.bead_max_replicas or self.max_replicas
                     or self.replicas, "bead_legs": self.bead_legs}
-                   if self.bead_search == "langevin" else {})}
+                   if self.bead_search == "langevin" else {}),
+                **({"coarse": self.coarse} if self.coarse is not None else {})}
 
 
 #: the named budgets of a sweep (``--budget``)
@@ -188,12 +201,14 @@ BUDGETS: dict[str, Budget] = {
 
 
 def budget_of(name: str, *, replicas: int | None = None, moves: int | None = None,
-              bead_search: str | None = None, bead_steps: int | None = None) -> Budget:
+              bead_search: str | None = None, bead_steps: int | None = None,
+              coarse: int | None = None) -> Budget:
     """The named budget, with ``replicas`` or ``moves`` overridden where given (the name then
     becomes ``custom``, with no replicas added and no legs), its bead-rule search where
     ``bead_search`` is given (:data:`BEAD_SEARCHES`; the name stays), and the dynamics steps
     of a Langevin bead replica where ``bead_steps`` is given (the name and the caps stay; the
-    replicas are another ensemble: the steps are part of their settings).
+    replicas are another ensemble: the steps are part of their settings), and the tube
+    replicas' coarse stage where ``coarse`` is given (likewise).
 
     Why a deeper bead search is offered (docs/methods/search.md): on
     24 knots whose 16 Langevin replicas of 10⁶ steps never converged in the 249-knot atlas,
@@ -221,6 +236,8 @@ def budget_of(name: str, *, replicas: int | None = None, moves: int | None = Non
                 "given with a Langevin bead search only (bead search langevin, the default "
                 f"and full budgets'), not with {b.bead_search}, which counts Monte Carlo moves")
         b = replace(b, bead_steps=bead_steps).validate()
+    if coarse is not None:  # the name and caps stay: another ensemble of the tube model
+        b = replace(b, coarse=coarse).validate()
     if replicas is None and moves is None:
         return b
     return replace(b, name="custom", replicas=b.replicas if replicas is None else replicas,

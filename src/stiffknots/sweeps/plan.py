@@ -68,7 +68,11 @@ def sweep_settings(model: Width, budget: Budget, problem: str = PROBLEM) -> dict
     s = AnnealSettings(moves=moves, schedule=schedule, params=params_of(model))
     s.validate()
     # every replica is polished to its local minimum (problems.base.polish_run)
-    return {**s.as_dict(), "problem": problem, "start": START_POLICY, "polish": True}
+    out = {**s.as_dict(), "problem": problem, "start": START_POLICY, "polish": True}
+    coarse = budget.coarse_of(model)
+    if coarse is not None:  # absent otherwise: the keys of every stored replica unchanged
+        out["coarse"] = coarse
+    return out
 
 
 @dataclass(frozen=True)
@@ -309,9 +313,10 @@ def build_problem(knot: str, model: Width, budget: Budget, seed: int,
     problem = ClosedAnneal(k.name, beads=model.beads, moves=moves, schedule=schedule,
                            replicas=budget.replicas, seed=seed, params=params_of(model),
                            start=starts, rounds=1, polish=settings.get("polish", True),
-                           tube_route=False)  # a sweep seeds its bead ensembles instead
+                           tube_route=False,  # a sweep seeds its bead ensembles instead
+                           coarse=settings.get("coarse"))
     mine = {key: v for key, v in settings.items()
-            if key not in ("problem", "start", "polish")}
+            if key not in ("problem", "start", "polish", "coarse")}
     if canonical_json(problem.settings.as_dict()) != canonical_json(mine):
         raise RuntimeError(f"the settings of {knot}/{model.exclusion} differ from the sweep's key "
                            "settings; this is a bug in stiffknots, please report it")

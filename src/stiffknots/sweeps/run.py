@@ -221,6 +221,9 @@ def store_replica(store: Store, job: SweepJob, replica: Any, *, budget: str | No
     if job.parent is not None:  # a continuation leg (:mod:`stiffknots.sweeps.legs`)
         extra.update(search=job.parent["search"], leg_of=job.parent["replica"],
                      leg_parent_epsilon=job.parent["epsilon"])
+    coarse = (getattr(replica, "observables", None) or {}).get("coarse")
+    if coarse is not None:  # its coarse stage (:mod:`stiffknots.problems.coarse`)
+        extra["coarse"] = coarse
     row, coords = row_from_replica(
         replica, knot=job.knot, width=job.model, seed=job.seed, settings=job.settings,
         shape=shape.label, multiplicity=shape.multiplicity, problem=job.settings["problem"],
