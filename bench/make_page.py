@@ -595,6 +595,11 @@ BENCHMARKS: list[tuple[str, str, str, str, Callable[[dict], list[str]]]] = [
      "30 M moves a replica, each verdict against the lowest state any sweep or audit found",
      "python bench/verdict_rules.py 15M=A.db:3 30M=B.db:3 ... --knots CHUNK "
      "--name verdict_rules_10", verdict_rules),
+    ("verdict_rules_coarse", "Coarse to fine on a random sample",
+     "the first 20 knots of the audit campaign swept at the default, with 30 M moves and with "
+     "--coarse 100, each verdict against the lowest state any sweep or audit found",
+     "python bench/verdict_rules.py 15M=A.db:3 30M=B.db:3 'coarse 100=C.db:3' --knots CHUNK "
+     "--name verdict_rules_coarse", verdict_rules),
     ("search_schedules", "One search of the hardest tube knots under other schedules",
      "how often a single search reaches the lowest known state of the knots whose verdicts "
      "the audit beat, per schedule (coarse to fine, temperature windows, longer searches), "
