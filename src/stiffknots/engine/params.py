@@ -162,6 +162,12 @@ class MoveParams:
         wt = self.w if self.exclusion == "tube" else 0.0
         return 2.0 * max(1.5 + max(wt, self.delta), self.d + 0.5)
 
+    def violation(self, pos: np.ndarray, closed: bool = True) -> float:
+        """The worst violation of this exclusion rule by the chain ``pos`` (≤ 0: none),
+        brute force (:func:`~stiffknots.engine.prims.check_state`)."""
+        mode = EXCLUSION_MODELS.index(self.exclusion)
+        return float(K.check_state(pos, mode, self.d, self.w, not closed))
+
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """The kernels' integer and float parameter arrays (slots in
         :mod:`stiffknots.engine.prims`)."""

@@ -18,7 +18,6 @@ from stiffknots.engine.force_kernel import run_end_moves, run_slide_moves
 from stiffknots.engine.kernel import NB_NMETA, NB_RADIUS, NBR_PER_BEAD, run_moves, run_single_moves
 from stiffknots.engine.params import (
     ENERGY_MODELS,
-    EXCLUSION_MODELS,
     Ensemble,
     MoveParams,
     ensemble_of,
@@ -230,9 +229,7 @@ class ChainState:
 
     def violation(self) -> float:
         """Worst violation of the exclusion rule (≤ 0: none), brute force."""
-        p = self.params
-        mode = EXCLUSION_MODELS.index(p.exclusion)
-        return float(K.check_state(self.pos, mode, p.d, p.w, not self.closed))
+        return self.params.violation(self.pos, self.closed)
 
     def set_max_turn(self, theta: float | None) -> None:
         """Change the curvature limit θ_max of the running state (None: no limit)."""

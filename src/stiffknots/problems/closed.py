@@ -231,15 +231,12 @@ class ClosedAnneal(Problem):
         EmbeddingError
             Naming the start, the knot, N, the rule and by how much, and what to change.
         """
-        from stiffknots.engine.prims import check_state
         from stiffknots.errors import EmbeddingError
 
         seen = self._admissible
         key = (start, params.exclusion, params.d, params.w)
         if key not in seen:
-            x = self.chains[start]
-            seen[key] = float(check_state(x, 0 if params.exclusion == "bead" else 1,
-                                          params.d, params.w, False))
+            seen[key] = params.violation(self.chains[start])
         viol = seen[key]
         if viol > 1e-12:  # the engine's own threshold (engine.state.ChainState)
             rule = (f"bead rule (beads ≥ d = {params.d:.4g} apart)" if params.exclusion == "bead"

@@ -57,13 +57,6 @@ def coarse_seed(seed: int, coarse: int) -> int:
     return int(ss.generate_state(1, np.uint64)[0] % 2**63)
 
 
-def _violation(x: np.ndarray, params) -> float:
-    from stiffknots.engine.prims import check_state
-
-    return float(check_state(x, 0 if params.exclusion == "bead" else 1, params.d, params.w,
-                             False))
-
-
 def coarse_start(knot: str, start: str, settings: AnnealSettings, beads: int, coarse: int,
                  seed: int, replica: int = 0) -> tuple[np.ndarray | None, dict]:
     """The fine search's start from a coarse search (module docstring).
@@ -99,7 +92,7 @@ def coarse_start(knot: str, start: str, settings: AnnealSettings, beads: int, co
             x = start_chain(get_knot(knot), start, n0)
         except EmbeddingError:
             continue
-        if _violation(x, p) <= 1e-12:
+        if p.violation(x) <= 1e-12:
             x0, coarse = x, n0
             break
     if x0 is None:
@@ -117,7 +110,7 @@ def coarse_start(knot: str, start: str, settings: AnnealSettings, beads: int, co
         y = resample(Chain(x, True), beads).coords
     except ResampleError as exc:
         return None, {**info, "reason": f"the coarse chain does not resample to {beads}: {exc}"}
-    if _violation(y, p) > 1e-12:
+    if p.violation(y) > 1e-12:
         return None, {**info, "reason": f"the coarse chain resampled to {beads} beads is not "
                                         f"admissible for the {p.exclusion} rule"}
     return y, {**info, "used": True, "epsilon": eps, "seed": seed0,
